@@ -1,0 +1,3 @@
+from clone.cli.main import main
+
+main()

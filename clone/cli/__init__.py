@@ -1,0 +1,1 @@
+"""The `clone` command line (typer). Sub-command modules import heavy libraries inside their commands."""

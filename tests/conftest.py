@@ -1,0 +1,36 @@
+"""Shared fixtures: small tracks built in memory; paths to ../shared when it is there."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pose_io import PoseTrack
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    if not SHARED.is_dir():
+        pytest.skip("../shared is not present")
+    return SHARED
+
+
+@pytest.fixture
+def walking_track() -> PoseTrack:
+    """A 40-frame body25 track of a figure whose arms and legs swing, at 30 fps in a 640x480 frame."""
+    rng = np.random.default_rng(0)
+    t = np.arange(40)[:, None]
+    base = np.array(
+        [[320, 100], [320, 140], [290, 140], [280, 190], [275, 240], [350, 140], [360, 190], [365, 240],
+         [320, 250], [300, 250], [300, 320], [300, 390], [340, 250], [340, 320], [340, 390], [312, 92],
+         [328, 92], [305, 98], [335, 98], [345, 405], [352, 403], [335, 398], [295, 405], [288, 403],
+         [305, 398]], dtype=np.float32)
+    joints = np.repeat(base[None], 40, axis=0)
+    joints[:, [4, 7, 11, 14], 0] += 15 * np.sin(t / 5.0)
+    joints += rng.normal(0, 0.5, joints.shape).astype(np.float32)
+    conf = np.full(joints.shape[:2], 0.9, dtype=np.float32)
+    return PoseTrack(joints, conf, 30.0, (640, 480), "body25")
