@@ -41,31 +41,55 @@ PCK_ALPHAS = (0.05, 0.1)
 
 @dataclass(frozen=True)
 class MetricInfo:
-    """What one summary number means: its label, unit and which direction is better."""
+    """What one summary number means: its label, unit, which direction is better, and its definition."""
 
     label: str
     unit: str
     better: Literal["lower", "higher"]
+    meaning: str
     scale: float = 1.0  # multiply by this for display (e.g. MSE in height² shown x 1000)
 
 
 # Summary keys produced below, in the order a report shows them.
 METRICS: dict[str, MetricInfo] = {
-    "limb_error_pct": MetricInfo("Limb-length error", "% of height", "lower"),
-    "foot_slide_pct": MetricInfo("Foot skating", "% of height / frame", "lower"),
-    "foot_slide_px": MetricInfo("Foot skating", "px / frame", "lower"),
-    "contact_share": MetricInfo("Ankle contact share", "share of ankle-frames", "higher"),
-    "jitter_pct": MetricInfo("Jitter (acceleration)", "% of height / frame²", "lower"),
-    "outside_share": MetricInfo("Joints outside frame", "share", "lower"),
-    "pose_mse": MetricInfo("Pose MSE (paper) x 10³", "height² x 10³", "lower", 1000.0),
-    "pose_rmse_pct": MetricInfo("Joint RMSE", "% of height", "lower"),
-    "pck_0.05": MetricInfo("PCK@0.05", "share", "higher"),
-    "pck_0.1": MetricInfo("PCK@0.1", "share", "higher"),
-    "ssim": MetricInfo("SSIM (frame)", "", "higher"),
-    "psnr": MetricInfo("PSNR (frame)", "dB", "higher"),
-    "ssim_crop": MetricInfo("SSIM (person crop)", "", "higher"),
-    "psnr_crop": MetricInfo("PSNR (person crop)", "dB", "higher"),
-}
+    "limb_error_pct": MetricInfo(
+        "Limb-length error", "% of height", "lower",
+        "mean over frames and limbs of |driven limb length - the reference's median length of that limb|",
+    ),
+    "foot_slide_pct": MetricInfo(
+        "Foot skating", "% of height / frame", "lower",
+        "mean horizontal move of an ankle between two frames in which it touches the ground (near its lowest "
+        "point within about a second, moving little vertically)",
+    ),
+    "foot_slide_px": MetricInfo("Foot skating (px)", "px / frame", "lower", "foot skating in pixels of the image"),
+    "contact_share": MetricInfo(
+        "Ankle contact", "share of ankle-frames", "higher", "share of ankle-frames judged to touch the ground"
+    ),
+    "jitter_pct": MetricInfo(
+        "Jitter", "% of height / frame²", "lower",
+        "mean norm of every joint's second difference x[t+1] - 2 x[t] + x[t-1] (acceleration)",
+    ),
+    "outside_share": MetricInfo("Joints outside frame", "share", "lower", "share of joints outside the image"),
+    "pose_mse": MetricInfo(
+        "Pose MSE (paper)", "height² x 10³", "lower",
+        "the paper's error: mean over frames, joints and both coordinates of ((driven - true) / height)², "
+        "height = the ground truth's; shown x 1000",
+        1000.0,
+    ),
+    "pose_rmse_pct": MetricInfo(
+        "Joint RMSE", "% of height", "lower", "root mean squared distance between driven and true joints"
+    ),
+    "pck_0.05": MetricInfo("PCK@0.05", "share", "higher", "share of joints within 5 % of the height of the truth"),
+    "pck_0.1": MetricInfo("PCK@0.1", "share", "higher", "share of joints within 10 % of the height of the truth"),
+    "ssim": MetricInfo("SSIM (frame)", "", "higher", "structural similarity of the whole frame to the true frame"),
+    "psnr": MetricInfo(
+        "PSNR (frame)", "dB", "higher", "peak signal-to-noise ratio of the whole frame (inf when identical)"
+    ),
+    "ssim_crop": MetricInfo(
+        "SSIM (person)", "", "higher", "SSIM of a crop around the true pose's box plus 15 % margin"
+    ),
+    "psnr_crop": MetricInfo("PSNR (person)", "dB", "higher", "PSNR of the same crop around the person"),
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
