@@ -1,0 +1,148 @@
+"""`clone train-ref` and `clone drive`: performance cloning with a pose-to-frame generator.
+
+    clone train-ref ref_poses/ frames/          # writes ./ref_model.pt (+ ref_model.pt.state, ref_model.preview.png)
+    clone drive drive_poses/ --out out.mp4      # reads ./ref_model.pt
+
+torch and the video libraries are imported inside the commands so that `clone --help` stays fast.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from clone.cli.common import console, device_option, user_errors
+
+DEFAULT_MODEL = Path("ref_model.pt")
+DEFAULT_SIZE = 128
+
+
+def _device(spec: str, threads: Optional[int]):  # -> torch.device
+    """Resolve --device (InputError on a bad one); on CPU set the torch thread count."""
+    from pose_io.errors import InputError
+    from retarget.runtime import configure_threads, resolve_device
+
+    try:
+        device = resolve_device(spec)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if device.type == "cpu":
+        configure_threads(threads)
+    return device
+
+
+@user_errors
+def train_ref(
+    ref_poses: Path = typer.Argument(..., help="The reference's poses: any track `clone pose` reads."),
+    frames: Path = typer.Argument(..., help="The reference's frames: a video or a folder of images."),
+    out: Path = typer.Option(DEFAULT_MODEL, "--out", "-o", help="Reference model to write."),
+    size: Optional[int] = typer.Option(
+        None, "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from 32). Default {DEFAULT_SIZE}."
+    ),
+    steps: Optional[int] = typer.Option(
+        None, "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes)."
+    ),
+    minutes: Optional[float] = typer.Option(None, "--minutes", help="Stop after this many minutes."),
+    batch_size: int = typer.Option(1, "--batch-size", min=1, help="Samples per step."),
+    canvas: str = typer.Option("crop", "--canvas", help="crop (around the performer) | full (letterboxed frame)."),
+    device: str = device_option(),
+    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: free cores)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue training the model at --out."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing model at --out."),
+    align: str = typer.Option("exact", "--align", help="exact: frame and pose counts must agree | trim."),
+    weights: Optional[Path] = typer.Option(
+        None, "--weights", help="Retargeting weights for the reference's codes (default: the shipped ones)."
+    ),
+) -> None:
+    """Train a pose-to-frame generator on a reference video (frame t must match pose t).
+
+    Writes ONE model file (default ./ref_model.pt, where `clone drive` looks), a .state file next to it for
+    --resume, and a preview image (pose | generated | real) that is refreshed while training. An existing
+    model is never replaced unless --resume or --overwrite is given.
+    """
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    from clone.networks import default_depth
+    from clone.train_ref import TrainConfig, TrainProgress, train_reference
+    from pose_io.errors import InputError
+
+    if size is not None:
+        try:
+            default_depth(size)
+        except ValueError as exc:
+            raise InputError(f"--size: {exc}") from None
+    if canvas not in ("crop", "full"):
+        raise InputError(f"unknown --canvas {canvas!r}; valid: crop, full")
+    dev = _device(device, threads)
+    if resume:
+        # The stored run's settings apply; a --size given must match it.
+        config = TrainConfig(size=size, batch_size=batch_size) if size is not None else None
+    else:
+        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas, batch_size=batch_size)
+
+    with Progress(
+        TextColumn("[bold]train-ref"), BarColumn(), TextColumn("{task.fields[info]}"), TimeElapsedColumn(),
+        TimeRemainingColumn(), console=console, transient=True,
+    ) as bar:
+        task = bar.add_task("train", total=None, info="reading frames")
+
+        def update(p: TrainProgress) -> None:
+            losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
+            info = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
+            if p.total is not None:
+                bar.update(task, completed=p.step, total=p.total, info=info)
+            else:
+                bar.update(task, completed=p.elapsed, total=p.limit_s, info=info)
+
+        result = train_reference(
+            ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
+            overwrite=overwrite, align=align, weights=weights, progress=update,
+        )
+    skipped = f", {result.skipped_frames} skipped (no usable pose)" if result.skipped_frames else ""
+    codes = "with retargeting codes" if result.has_codes else "without retargeting codes (drive with --weights)"
+    state = " (interrupted)" if result.interrupted else ""
+    console.print(f"trained {result.steps_this_run} steps (total {result.steps}) in {result.seconds:.0f} s on "
+                  f"{result.usable_frames} frames{skipped}{state}")
+    console.print(f"wrote {result.model_path} {codes}; preview {result.preview_path}")
+
+
+@user_errors
+def drive(
+    drive_poses: Path = typer.Argument(..., help="The driver's poses: any track `clone pose` reads."),
+    out: Path = typer.Option(..., "--out", "-o", help="Video to write (.mp4, H.264)."),
+    model: Path = typer.Option(DEFAULT_MODEL, "--model", "-m", help="Reference model from `clone train-ref`."),
+    method: str = typer.Option(
+        "retarget", "--method", help="retarget (network) | global-scale (Everybody Dance Now) | none."
+    ),
+    poses_out: Optional[Path] = typer.Option(
+        None, "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv."
+    ),
+    side_by_side: bool = typer.Option(
+        False, "--side-by-side", help="Frames show driver skeleton | driven skeleton | result."
+    ),
+    device: str = device_option(),
+    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: free cores)."),
+    weights: Optional[Path] = typer.Option(None, "--weights", help="Retargeting weights (default: shipped)."),
+    max_gap: int = typer.Option(5, "--max-gap", min=0, help="Fill gaps of up to this many frames in the driver."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
+) -> None:
+    """Make a video of the reference performing the driver's motion."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from clone.drive import drive as run_drive
+
+    dev = _device(device, threads)
+    with Progress(TextColumn("[bold]drive"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                  console=console, transient=True) as bar:
+        task = bar.add_task("drive", total=None)
+        result = run_drive(
+            drive_poses, out, model_path=model, method=method, poses_out=poses_out, side_by_side=side_by_side,
+            device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap,
+            progress=lambda done, total: bar.update(task, completed=done, total=total),
+        )
+    console.print(f"wrote {result.out}: {result.frames} frames {result.size[0]}x{result.size[1]} at "
+                  f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)")
+    if result.poses_out is not None:
+        console.print(f"wrote {result.poses_out}")

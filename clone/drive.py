@@ -1,0 +1,263 @@
+"""Driving a trained reference model with someone else's poses (`clone drive`).
+
+1. Read the driver's track (any format ``pose_io`` reads), as body15, with short gaps filled.
+2. Move it onto the reference (``--method``):
+   - ``retarget``: the retargeting network, with the reference's skeleton and view codes stored in the model
+     (recomputed from the stored reference track when other weights are given);
+   - ``global-scale``: Everybody Dance Now's per-frame scale and translation between feet positions;
+   - ``none``: the driver's pixel coordinates as they are, read as the reference's.
+3. Draw each frame's pose map on the reference's canvas and run the generator frame after frame, each frame
+   conditioned on the one it generated before (the first on zeros, as in training).
+4. Write an H.264 mp4 at the driver's fps, one frame at a time: memory does not grow with the track.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numpy as np
+import torch
+
+from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
+from clone.global_scale import apply_global_scale, scale_stats
+from clone.networks import generator_input
+from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
+from pose_io.atomic import check_new_output
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
+
+METHODS = ("retarget", "global-scale", "none")
+DEFAULT_MODEL = "ref_model.pt"
+
+
+@dataclass(frozen=True)
+class DriveResult:
+    """What a drive wrote."""
+
+    out: Path
+    frames: int
+    fps: float
+    size: tuple[int, int]
+    method: str
+    poses_out: Path | None
+    seconds: float
+
+
+def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
+    """The driver's track as body15, gaps of at most ``max_gap`` frames filled linearly."""
+    from pose_io.clean import fill_gaps
+    from pose_io.readers import read_track
+
+    track = read_track(path).to_layout(LAYOUT)
+    if not (~track.missing).any():
+        raise InputError(f"{path}: no visible joints in any frame")
+    if max_gap > 0:
+        track, _ = fill_gaps(track, max_gap)
+    return track
+
+
+# ------------------------------------------------------------------------------------------------ methods
+
+
+def retargeting_weights(model: ReferenceModel, weights: str | os.PathLike | None) -> Path:
+    """The weights file to retarget with: ``weights``, else the shipped ones, else the file the model's codes
+    came from (when it is still there, unchanged)."""
+    from retarget.api import PACKAGED_WEIGHTS
+
+    if weights is not None:
+        return Path(weights)
+    if PACKAGED_WEIGHTS.is_file():
+        return PACKAGED_WEIGHTS
+    hint = Path(model.codes_weights_path) if model.codes_weights_path else None
+    if hint is not None and hint.is_file() and file_sha256(hint) == model.codes_weights:
+        log.info("retargeting with %s, the weights the model's codes came from", hint)
+        return hint
+    if model.reference_codes is None:
+        raise InputError("this reference model holds no retargeting codes (it was trained without retargeting "
+                         "weights) and none are shipped; pass --weights FILE or use --method global-scale")
+    raise InputError(f"the retargeting weights this model's codes came from ({model.codes_weights_path}) are "
+                     "gone and none are shipped; pass --weights FILE or use --method global-scale")
+
+
+def retarget_onto(
+    driver: PoseTrack, model: ReferenceModel, weights: str | os.PathLike | None, device: str = "cpu"
+) -> PoseTrack:
+    """The driver's motion performed by the reference, in the reference's pixels (retargeting network).
+
+    Uses the codes stored in the model when the same weights made them; otherwise computes them from the
+    reference track stored in the model.
+    """
+    from retarget.api import ReferenceCodes, load_retargeter
+
+    path = retargeting_weights(model, weights)
+    retargeter = load_retargeter(path, device=device)
+    if model.reference_codes is not None and file_sha256(path) == model.codes_weights:
+        codes = ReferenceCodes.from_dict(model.reference_codes)
+    else:
+        log.info("computing the reference's codes from its stored track with %s", path)
+        codes = retargeter.reference_codes(model.reference_track)
+    return retargeter.retarget(driver, codes)
+
+
+def global_scale_onto(driver: PoseTrack, model: ReferenceModel) -> PoseTrack:
+    """The driver moved and scaled per frame onto the reference's feet positions (Everybody Dance Now)."""
+    if model.scale_stats is None:
+        raise InputError("the reference never shows its ankles, so --method global-scale is not available; "
+                         "use --method retarget or none")
+    layout = driver.joint_layout
+    joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), model.scale_stats)
+    return driver.replace(joints=joints, image_size=model.canvas.image_size)
+
+
+def move_onto_reference(
+    driver: PoseTrack, model: ReferenceModel, method: str, weights: str | os.PathLike | None = None,
+    device: str = "cpu",
+) -> PoseTrack:
+    """The driver's poses in the reference's pixels, by ``method`` (one of :data:`METHODS`)."""
+    if method == "retarget":
+        return retarget_onto(driver, model, weights, device)
+    if method == "global-scale":
+        return global_scale_onto(driver, model)
+    if method == "none":
+        if driver.image_size != model.canvas.image_size:
+            log.warning("driver frames are %dx%d, the reference's %dx%d; --method none uses the coordinates "
+                        "as they are", *driver.image_size, *model.canvas.image_size)
+        return driver.replace(image_size=model.canvas.image_size)
+    raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}")
+
+
+# ------------------------------------------------------------------------------------------------ frames
+
+
+def generate_frames(
+    model: ReferenceModel, track: PoseTrack, device: torch.device | str = "cpu", chunk: int = 16
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Run the generator over a track in the reference's pixels.
+
+    Pose maps are drawn and moved to the device ``chunk`` frames at a time; a temporal generator then runs
+    frame after frame on its own previous output, a non-temporal one on the whole chunk.
+
+    Args:
+        model: the reference model.
+        track: body15 poses in the reference's image pixels.
+        device: where the generator runs.
+        chunk: frames per batch of pose maps.
+
+    Yields:
+        ``(pose map, frame)`` per track frame, both [S, S, 3] uint8 RGB.
+    """
+    from clone.train_ref import to_images, to_tensor
+
+    device = torch.device(device)
+    net = model.build_generator(device)
+    size, layout = model.canvas.size, track.joint_layout
+    prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
+    with torch.inference_mode():
+        for start in range(0, track.num_frames, chunk):
+            joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
+            maps = np.stack([render_pose_map(j, size, layout) for j in joints])  # [C, S, S, 3]
+            pose = to_tensor(maps).to(device)  # [C, 3, S, S]
+            if model.temporal:
+                outs = []
+                for i in range(len(pose)):
+                    prev = net(generator_input(pose[i:i + 1], prev))  # [1, 3, S, S]
+                    outs.append(prev)
+                frames = to_images(torch.cat(outs))
+            else:
+                frames = to_images(net(pose))
+            yield from zip(maps, frames)
+
+
+def side_by_side_frame(driver_joints: np.ndarray, driver_canvas: Any, pose_map: np.ndarray, frame: np.ndarray,
+                       layout: Any) -> np.ndarray:
+    """[S, 3S, 3]: the driver's skeleton (its whole frame letterboxed) | the driven pose map | the result."""
+    size = frame.shape[0]
+    driver_map = render_pose_map(image_to_canvas(driver_joints, driver_canvas), size, layout)
+    return np.concatenate([driver_map, pose_map, frame], axis=1)
+
+
+# ------------------------------------------------------------------------------------------------ command
+
+
+def check_poses_out(track: PoseTrack, path: Path, overwrite: bool) -> None:
+    """Fail before anything is written when ``path`` cannot take the driven track."""
+    from pose_io.writers import output_format
+
+    check_new_output(path, overwrite)
+    if output_format(path) == "openpose":
+        visible = track.joints[~track.missing]
+        if len(visible) and (visible < 0).any():
+            raise InputError(f"{path}: driven poses leave the reference frame (negative coordinates), which "
+                             "OpenPose JSON cannot hold; write them to a .npz file instead")
+
+
+def drive(
+    driver_path: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    model_path: str | os.PathLike = DEFAULT_MODEL,
+    method: str = "retarget",
+    poses_out: str | os.PathLike | None = None,
+    side_by_side: bool = False,
+    device: torch.device | str = "cpu",
+    weights: str | os.PathLike | None = None,
+    overwrite: bool = False,
+    max_gap: int = 5,
+    progress: Callable[[int, int], None] | None = None,
+) -> DriveResult:
+    """Make a video of the reference performing the driver's motion.
+
+    Args:
+        driver_path: the driver's poses (any format ``pose_io`` reads).
+        out: the ``.mp4`` to write (H.264, yuv420p, the driver's fps).
+        model_path: the reference model from ``clone train-ref``.
+        method: ``retarget``, ``global-scale`` or ``none``.
+        poses_out: also write the driven poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
+        side_by_side: frames show driver skeleton | driven skeleton | result.
+        device: where the networks run.
+        weights: retargeting weights (default: the shipped ones or, failing that, the model's stored codes).
+        overwrite: replace existing outputs.
+        max_gap: fill gaps of at most this many frames in the driver (0: none).
+        progress: called with (frames done, total) after every frame.
+
+    Returns:
+        What was written.
+    """
+    from pose_io.video import VideoWriter
+    from pose_io.writers import write_track
+
+    t0 = time.perf_counter()
+    out = Path(out)
+    if method not in METHODS:
+        raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}")
+    if max_gap < 0:
+        raise InputError(f"--max-gap must be >= 0, got {max_gap}")
+    check_new_output(out, overwrite)
+    model = load_reference_model(model_path)
+    driver = read_driver(driver_path, max_gap)
+    driven = move_onto_reference(driver, model, method, weights, str(device))
+    poses_path = Path(poses_out) if poses_out is not None else None
+    if poses_path is not None:
+        check_poses_out(driven, poses_path, overwrite)
+
+    driver_canvas = full_frame_canvas(driver.image_size, model.canvas.size)
+    total = driven.num_frames
+    with VideoWriter(out, fps=driven.fps, overwrite=overwrite) as video:
+        for t, (pose_map, frame) in enumerate(generate_frames(model, driven, device)):
+            if side_by_side:
+                frame = side_by_side_frame(driver.joints[t], driver_canvas, pose_map, frame, driver.joint_layout)
+            video.write(frame)
+            if progress is not None:
+                progress(t + 1, total)
+    if poses_path is not None:
+        write_track(driven, poses_path, overwrite=overwrite)
+    width = model.canvas.size * (3 if side_by_side else 1)
+    return DriveResult(out, total, driven.fps, (width, model.canvas.size), method, poses_path,
+                       time.perf_counter() - t0)

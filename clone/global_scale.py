@@ -1,0 +1,175 @@
+"""Everybody Dance Now's global pose normalisation (Chan et al. 2019, §3.3), as small pure functions.
+
+A driver and a reference are filmed from different distances and have different heights. For each video we
+find the farthest and the closest position of the feet (the smallest and the largest image y of the lower
+ankle) and how tall the performer appears at each. A driver's frame is then scaled and moved so that its
+feet land at the linearly corresponding place between the reference's farthest and closest feet, at a scale
+interpolated linearly between the height ratios at the two ends:
+
+    a     = (y_foot - s_far) / (s_close - s_far)
+    scale = t_h_far / s_h_far + a * (t_h_close / s_h_close - t_h_far / s_h_far)
+    foot  = t_far + a * (t_close - t_far)
+
+The paper gives only the vertical mapping. Horizontally we keep the driver's motion: its offset from its own
+median foot x is scaled and added to the reference's median foot x. "Min" and "max" are robust quantiles and
+"the tallest height" near each end a high quantile, so a few wrong detections do not decide the result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from pose_io.errors import InputError
+from pose_io.layouts import JointLayout
+
+ANKLES = ("l_ankle", "r_ankle")
+
+
+@dataclass(frozen=True)
+class ScaleStats:
+    """Where a performer's feet go in a video and how tall they appear there (image pixels).
+
+    Attributes:
+        foot_far: y of the farthest foot position (small y, high in the image).
+        foot_close: y of the closest foot position (large y).
+        height_far: the performer's apparent height near the farthest position.
+        height_close: the performer's apparent height near the closest position.
+        center_x: median x of the feet.
+    """
+
+    foot_far: float
+    foot_close: float
+    height_far: float
+    height_close: float
+    center_x: float
+
+    def to_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ScaleStats":
+        return cls(**{k: float(d[k]) for k in ("foot_far", "foot_close", "height_far", "height_close", "center_x")})
+
+
+def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
+    """The lower ankle of each frame (the foot on the ground).
+
+    Args:
+        joints: [T, J, 2] image pixels, NaN where missing.
+        layout: layout of ``joints`` (must have ``l_ankle`` and ``r_ankle``).
+
+    Returns:
+        [T, 2]; NaN where both ankles are missing.
+    """
+    ankles = joints[:, layout.indices(ANKLES)]  # [T, 2 ankles, 2]
+    y = np.where(np.isnan(ankles[..., 1]), -np.inf, ankles[..., 1])  # [T, 2]
+    lower = np.argmax(y, axis=1)  # [T]
+    out = ankles[np.arange(len(joints)), lower].astype(np.float64)  # [T, 2]
+    out[~np.isfinite(y).any(axis=1)] = np.nan
+    return out
+
+
+def apparent_heights(joints: np.ndarray, foot_y: np.ndarray) -> np.ndarray:
+    """Per-frame height: from the topmost visible joint down to the lower ankle.
+
+    Args:
+        joints: [T, J, 2] image pixels, NaN where missing.
+        foot_y: [T] lower-ankle y.
+
+    Returns:
+        [T]; NaN where the foot is missing.
+    """
+    y = joints[..., 1].astype(np.float64)  # [T, J]
+    top = np.min(np.where(np.isnan(y), np.inf, y), axis=1)  # [T]
+    return np.where(np.isfinite(top) & np.isfinite(foot_y), foot_y - top, np.nan)
+
+
+def scale_stats(
+    joints: np.ndarray, layout: JointLayout, quantile: float = 0.02, band: float = 0.1, tall: float = 0.9
+) -> ScaleStats:
+    """The statistics global scaling needs from one video.
+
+    Args:
+        joints: [T, J, 2] image pixels, NaN where missing.
+        layout: layout of ``joints``.
+        quantile: the far and close foot positions are these quantiles of the foot's y.
+        band: frames whose foot lies within this fraction of the foot range from an end count as "at" it.
+        tall: the height at an end is this quantile of the heights of the frames at it.
+
+    Returns:
+        The statistics. Raises InputError when no frame shows an ankle.
+    """
+    foot = foot_points(joints, layout)  # [T, 2]
+    heights = apparent_heights(joints, foot[:, 1])  # [T]
+    ok = np.isfinite(foot).all(axis=1) & np.isfinite(heights)
+    if not ok.any():
+        raise InputError("global scaling needs ankles, and no frame shows one")
+    fy, h = foot[ok, 1], heights[ok]
+    far, close = np.quantile(fy, quantile), np.quantile(fy, 1.0 - quantile)
+    width = band * (close - far)
+    h_far = np.quantile(h[fy <= far + width], tall)
+    h_close = np.quantile(h[fy >= close - width], tall)
+    return ScaleStats(
+        foot_far=float(far), foot_close=float(close), height_far=float(max(h_far, 1e-3)),
+        height_close=float(max(h_close, 1e-3)), center_x=float(np.median(foot[ok, 0])),
+    )
+
+
+def interpolate_missing(values: np.ndarray) -> np.ndarray:
+    """[T] values with NaNs filled linearly in time (held constant beyond the ends); all-NaN stays NaN."""
+    values = np.asarray(values, dtype=np.float64)
+    ok = np.isfinite(values)
+    if ok.all() or not ok.any():
+        return values.copy()
+    t = np.arange(len(values))
+    return np.interp(t, t[ok], values[ok])
+
+
+def global_scale_params(foot_y: np.ndarray, source: ScaleStats, target: ScaleStats) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame scale and target foot y.
+
+    Args:
+        foot_y: [T] the source's lower-ankle y per frame (no NaN).
+        source: statistics of the source (driver) video.
+        target: statistics of the target (reference) video.
+
+    Returns:
+        ``(scale [T], target_foot_y [T])``. A source whose feet never move vertically maps to the middle of
+        the target's range.
+    """
+    span = source.foot_close - source.foot_far
+    if abs(span) > 1e-6:
+        a = (foot_y - source.foot_far) / span
+    else:
+        a = np.full_like(foot_y, 0.5, dtype=np.float64)
+    ratio_far = target.height_far / source.height_far
+    ratio_close = target.height_close / source.height_close
+    scale = np.maximum(ratio_far + a * (ratio_close - ratio_far), 1e-3)
+    target_y = target.foot_far + a * (target.foot_close - target.foot_far)
+    return scale, target_y
+
+
+def apply_global_scale(joints: np.ndarray, layout: JointLayout, source: ScaleStats, target: ScaleStats) -> np.ndarray:
+    """Move a source track onto a target's feet positions and scale.
+
+    Args:
+        joints: [T, J, 2] source image pixels, NaN where missing.
+        layout: layout of ``joints``.
+        source: statistics of the source (usually ``scale_stats(joints, layout)``).
+        target: statistics of the target (reference).
+
+    Returns:
+        [T, J, 2] float32 in the target's image pixels, NaN where the input is NaN. Frames without a visible
+        ankle use the foot position interpolated from the neighbouring frames.
+    """
+    foot = foot_points(joints, layout)  # [T, 2]
+    fy = interpolate_missing(foot[:, 1])
+    if not np.isfinite(fy).all():
+        raise InputError("global scaling needs ankles, and no frame shows one")
+    scale, target_y = global_scale_params(fy, source, target)  # [T], [T]
+    out = np.empty(joints.shape, dtype=np.float64)
+    out[..., 0] = target.center_x + scale[:, None] * (joints[..., 0] - source.center_x)
+    out[..., 1] = target_y[:, None] + scale[:, None] * (joints[..., 1] - fy[:, None])
+    return out.astype(np.float32)

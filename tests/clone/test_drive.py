@@ -1,0 +1,181 @@
+"""drive: train-ref -> drive round trips through the CLI, output checks, and bad model files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import imageio_ffmpeg
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from clone.cli.main import app
+from clone.drive import generate_frames, move_onto_reference
+from clone.reference_model import load_reference_model
+from pose_io.readers import read_track
+from pose_io.writers import write_track
+from retarget.api import PACKAGED_WEIGHTS
+from tests.clone.test_train_ref import OFFICIAL_WEIGHTS, figure_track, one_line_error, train_args, write_reference
+
+
+@pytest.fixture(autouse=True)
+def _restore_threads():
+    before = torch.get_num_threads()
+    yield
+    torch.set_num_threads(before)
+
+
+@pytest.fixture
+def trained(tmp_path: Path) -> Path:
+    poses, frames = write_reference(tmp_path / "ref", figure_track(24))
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out))
+    assert result.exit_code == 0, result.output
+    return out
+
+
+@pytest.fixture
+def driver(tmp_path: Path) -> Path:
+    """A smaller figure in a bigger frame, 30 frames at 12 fps."""
+    return write_track(figure_track(30, width=160, height=120, scale=0.7, phase=5.0, fps=12.0), tmp_path / "drv")
+
+
+def read_video(path: Path) -> tuple[list[np.ndarray], float, tuple[int, int]]:
+    gen = imageio_ffmpeg.read_frames(str(path))
+    meta = next(gen)
+    w, h = meta["size"]
+    frames = [np.frombuffer(f, np.uint8).reshape(h, w, 3) for f in gen]
+    return frames, float(meta["fps"]), (w, h)
+
+
+def drive_args(driver: Path, out: Path, model: Path, *extra: str) -> list[str]:
+    return ["drive", str(driver), "--out", str(out), "--model", str(model), "--threads", "1", "--device", "cpu",
+            *extra]
+
+
+def test_round_trip_writes_a_playable_mp4(trained, driver, tmp_path):
+    out = tmp_path / "out.mp4"
+    result = CliRunner().invoke(app, drive_args(driver, out, trained, "--method", "global-scale"))
+    assert result.exit_code == 0, result.output
+    frames, fps, size = read_video(out)
+    assert len(frames) == 30 and fps == pytest.approx(12.0) and size == (32, 32)
+    assert np.std(np.stack(frames)) > 1.0  # not a blank video
+
+
+def test_side_by_side_and_poses_out(trained, driver, tmp_path):
+    out, poses_out = tmp_path / "sbs.mp4", tmp_path / "driven"
+    args = drive_args(driver, out, trained, "--method", "none", "--side-by-side", "--poses-out", str(poses_out))
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    frames, _, size = read_video(out)
+    assert size == (96, 32) and len(frames) == 30
+    driven = read_track(poses_out)
+    assert driven.num_frames == 30 and driven.layout == "body15"
+    model = load_reference_model(trained)
+    assert driven.image_size == model.canvas.image_size
+    # --method none keeps the driver's coordinates.
+    np.testing.assert_allclose(driven.joints, read_track(driver).joints, atol=1e-3)
+
+
+def test_existing_output_is_kept_unless_overwrite(trained, driver, tmp_path):
+    out = tmp_path / "out.mp4"
+    out.write_bytes(b"mine")
+    args = drive_args(driver, out, trained, "--method", "none")
+    assert "already exists" in one_line_error(CliRunner().invoke(app, args))
+    assert out.read_bytes() == b"mine"
+    assert CliRunner().invoke(app, args + ["--overwrite"]).exit_code == 0
+    assert len(read_video(out)[0]) == 30
+
+
+def test_default_model_path(trained, driver, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    trained.rename(tmp_path / "ref_model.pt")
+    result = CliRunner().invoke(app, ["drive", str(driver), "--out", "o.mp4", "--method", "none", "--threads", "1"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "o.mp4").is_file()
+
+
+def test_bad_model_files_are_one_line_errors(driver, tmp_path):
+    out = tmp_path / "out.mp4"
+    cases = {
+        "missing.pt": None,
+        "corrupt.pt": b"\x00garbage" * 100,
+    }
+    for name, content in cases.items():
+        path = tmp_path / name
+        if content is not None:
+            path.write_bytes(content)
+        line = one_line_error(CliRunner().invoke(app, drive_args(driver, out, path, "--method", "none")))
+        assert name in line
+    foreign = tmp_path / "foreign.pt"
+    torch.save({"kind": "something-else", "format_version": 1}, foreign)
+    assert "not a clone2d" in one_line_error(CliRunner().invoke(app, drive_args(driver, out, foreign)))
+    plain = tmp_path / "plain.pt"
+    torch.save({"weight": torch.zeros(3)}, plain)
+    assert "not a clone2d" in one_line_error(CliRunner().invoke(app, drive_args(driver, out, plain)))
+    assert not out.exists()
+
+
+def test_newer_or_damaged_model_is_refused(trained, driver, tmp_path):
+    raw = torch.load(trained, map_location="cpu", weights_only=True)
+    newer = tmp_path / "newer.pt"
+    torch.save({**raw, "format_version": 99}, newer)
+    assert "version 99" in one_line_error(CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", newer)))
+    damaged = tmp_path / "damaged.pt"
+    raw["generator"]["config"]["base_channels"] = 7
+    torch.save(raw, damaged)
+    line = one_line_error(CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", damaged)))
+    assert "damaged reference model" in line
+
+
+def test_bad_method_and_empty_driver(trained, tmp_path):
+    drv = write_track(figure_track(10), tmp_path / "drv")
+    out = tmp_path / "o.mp4"
+    assert "valid: retarget, global-scale, none" in one_line_error(
+        CliRunner().invoke(app, drive_args(drv, out, trained, "--method", "magic")))
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    one_line_error(CliRunner().invoke(app, drive_args(empty, out, trained, "--method", "none")))
+    assert not out.exists()
+
+
+@pytest.mark.skipif(PACKAGED_WEIGHTS.is_file(), reason="retargeting weights are shipped")
+def test_retarget_without_codes_or_weights_is_a_clear_error(trained, driver, tmp_path):
+    line = one_line_error(CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", trained)))
+    assert "--weights" in line and "global-scale" in line
+
+
+@pytest.mark.skipif(not OFFICIAL_WEIGHTS.is_file(), reason="the authors' retargeting weights are not present")
+def test_retarget_with_weights_round_trip(tmp_path):
+    poses, frames = write_reference(tmp_path / "ref", figure_track(64))
+    model_path = tmp_path / "ref.pt"
+    args = train_args(poses, frames, model_path, "--weights", str(OFFICIAL_WEIGHTS))
+    assert CliRunner().invoke(app, args).exit_code == 0
+    drv = write_track(figure_track(48, width=160, height=120, scale=0.7, fps=20.0), tmp_path / "drv")
+    out = tmp_path / "out.mp4"
+    # No --weights: the file the model's codes came from is found again.
+    result = CliRunner().invoke(app, drive_args(drv, out, model_path, "--poses-out", str(tmp_path / "p.npz")))
+    assert result.exit_code == 0, result.output
+    frames_out, fps, _ = read_video(out)
+    assert len(frames_out) == 48 and fps == pytest.approx(20.0)
+    driven = read_track(tmp_path / "p.npz")
+    model = load_reference_model(model_path)
+    assert driven.image_size == model.canvas.image_size
+    # The driven figure has the reference's size, not the driver's (0.7x).
+    height = np.nanmedian(driven.joint("r_ankle")[:, 1] - driven.joint("neck")[:, 1])
+    ref_height = np.nanmedian(model.reference_track.joint("r_ankle")[:, 1] - model.reference_track.joint("neck")[:, 1])
+    assert abs(height / ref_height - 1.0) < 0.25
+
+
+def test_generation_is_deterministic_and_global_scale_lands_on_the_reference(trained):
+    model = load_reference_model(trained)
+    track = model.reference_track.frames(0, 6)
+    a = [f for _, f in generate_frames(model, track, chunk=4)]
+    b = [f for _, f in generate_frames(model, track, chunk=6)]
+    assert len(a) == 6 and all(np.array_equal(x, y) for x, y in zip(a, b))
+    # A driver that is the reference scaled by 2 comes back onto the reference.
+    ref = model.reference_track
+    big = ref.replace(joints=ref.joints * 2.0, image_size=(2 * ref.image_size[0], 2 * ref.image_size[1]))
+    moved = move_onto_reference(big, model, "global-scale")
+    np.testing.assert_allclose(moved.joints, ref.joints, atol=0.05)

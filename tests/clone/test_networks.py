@@ -1,0 +1,115 @@
+import pytest
+import torch
+import torch.nn.functional as F
+
+from clone.networks import (
+    DISCRIMINATORS,
+    GENERATORS,
+    DiscriminatorConfig,
+    GeneratorConfig,
+    PatchDiscriminator,
+    UNetGenerator,
+    build_discriminator,
+    build_generator,
+    default_depth,
+    discriminator_input,
+    feature_matching_loss,
+    generator_input,
+    lsgan_loss,
+)
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+def test_generator_shapes_and_range():
+    torch.manual_seed(0)
+    g = UNetGenerator(GeneratorConfig(base_channels=8, depth=4))
+    pose, prev = torch.randn(2, 3, 64, 48), torch.randn(2, 3, 64, 48)
+    y = g(generator_input(pose, prev))
+    assert y.shape == (2, 3, 64, 48)
+    assert y.abs().max() <= 1.0
+
+
+@pytest.mark.parametrize("depth", [1, 2, 5])
+def test_generator_depths(depth):
+    g = UNetGenerator(GeneratorConfig(base_channels=4, depth=depth, max_channels=16))
+    size = GeneratorConfig(depth=depth).min_size()
+    assert g(torch.zeros(1, 6, size, size)).shape == (1, 3, size, size)
+
+
+def test_discriminator_features_and_patch_scores():
+    d = PatchDiscriminator(DiscriminatorConfig(base_channels=8, num_layers=3))
+    x = discriminator_input(*(torch.randn(2, 3, 64, 64) for _ in range(4)))
+    assert x.shape == (2, 12, 64, 64)
+    feats = d(x)
+    assert len(feats) == 5
+    assert feats[-1].shape == (2, 1, 6, 6)  # 64 -> 32 -> 16 -> 8 -> 7 -> 6 (pix2pix's PatchGAN)
+
+
+def test_same_seed_same_network_and_deterministic_output():
+    cfg = GeneratorConfig(base_channels=8, depth=3)
+    torch.manual_seed(3)
+    a = UNetGenerator(cfg).eval()
+    torch.manual_seed(3)
+    b = UNetGenerator(cfg).eval()
+    x = torch.randn(1, 6, 32, 32)
+    with torch.no_grad():
+        ya, ya2, yb = a(x), a(x), b(x)
+    assert torch.equal(ya, ya2)
+    assert torch.equal(ya, yb)
+    torch.manual_seed(4)
+    c = UNetGenerator(cfg).eval()
+    with torch.no_grad():
+        assert not torch.equal(c(x), ya)
+
+
+def test_registries_and_unknown_names():
+    assert build_generator("unet", GeneratorConfig(depth=2)).__class__ is GENERATORS["unet"]
+    assert build_discriminator("patch", DiscriminatorConfig()).__class__ is DISCRIMINATORS["patch"]
+    with pytest.raises(ValueError, match="valid: unet"):
+        build_generator("resnet", GeneratorConfig())
+    with pytest.raises(ValueError, match="valid: patch"):
+        build_discriminator("multiscale", DiscriminatorConfig())
+
+
+def test_config_round_trip_and_validation():
+    cfg = GeneratorConfig(base_channels=16, depth=4)
+    assert GeneratorConfig.from_dict(cfg.to_dict()) == cfg
+    assert DiscriminatorConfig.from_dict(DiscriminatorConfig().to_dict()) == DiscriminatorConfig()
+    with pytest.raises(ValueError):
+        GeneratorConfig(depth=0)
+    assert default_depth(128) == 5 and default_depth(32) == 3 and default_depth(512) == 7
+    for bad in (100, 8, 0):
+        with pytest.raises(ValueError, match="power of two"):
+            default_depth(bad)
+
+
+def test_losses_known_values():
+    assert lsgan_loss(torch.ones(2, 1, 3, 3), True) == 0
+    assert lsgan_loss(torch.ones(2, 1, 3, 3), False) == 1
+    assert lsgan_loss(torch.full((1, 1, 2, 2), 0.5), True) == pytest.approx(0.25)
+    feats = [torch.randn(1, 4, 8, 8), torch.randn(1, 1, 4, 4)]
+    assert feature_matching_loss(feats, feats) == 0
+    shifted = [feats[0] + 0.5, feats[1] + 100.0]  # the score map is not part of feature matching
+    assert feature_matching_loss(shifted, feats) == pytest.approx(0.5)
+
+
+def test_one_adam_step_lowers_l1_on_a_tiny_batch():
+    torch.manual_seed(0)
+    g = UNetGenerator(GeneratorConfig(base_channels=8, depth=3))
+    x = torch.randn(2, 6, 32, 32)
+    target = torch.rand(2, 3, 32, 32) * 2 - 1
+    opt = torch.optim.Adam(g.parameters(), lr=2e-4, betas=(0.5, 0.999))
+    before = F.l1_loss(g(x), target)
+    opt.zero_grad()
+    before.backward()
+    opt.step()
+    with torch.no_grad():
+        after = F.l1_loss(g(x), target)
+    assert after < before
