@@ -36,6 +36,8 @@ def _root(
 
 
 # Verb groups register below, one line each, as they land.
+from clone.cli.synth import synth_app  # noqa: E402
+app.add_typer(synth_app, name="synth")
 from clone.cli import cloning  # noqa: E402
 app.command("train-ref")(cloning.train_ref); app.command("drive")(cloning.drive)  # noqa: E702
 

@@ -1,0 +1,82 @@
+"""`clone synth`: synthetic performers of the motion world.
+
+``clone synth render`` replays a motion-capture clip on a character and renders it from a view: frames,
+the exact projected BODY_25 poses and a meta file. Rendering the reference character with the driver's
+motion and the reference's view gives the ground truth of a cloning run. ``clone synth characters``
+lists the named characters.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from clone.cli.common import console, user_errors
+
+_SLEEVES = {"long": "long-sleeved", "short": "short-sleeved", "none": "sleeveless"}
+
+synth_app = typer.Typer(
+    help="Synthetic performers: render a motion on a character; list the characters.", no_args_is_help=True
+)
+
+
+@synth_app.command("render")
+@user_errors
+def render_command(
+    motion: Path = typer.Argument(..., help="Motion file: BVH (.bvh, .bvh.gz) or Acclaim AMC."),
+    out: Path = typer.Option(..., "--out", help="Output folder (frames/, poses/, poses.npz, meta.json)."),
+    character: str = typer.Option("average", "--character", help="Named character or an integer seed."),
+    yaw: float = typer.Option(0.0, "--yaw", help="View yaw in degrees (0 front, +90 the character's left)."),
+    pitch: float = typer.Option(0.0, "--pitch", help="Camera elevation in degrees (+ from above)."),
+    size: int = typer.Option(256, "--size", help="Square canvas side in pixels."),
+    start: int = typer.Option(0, "--start", help="First frame (after resampling to --fps)."),
+    frames: int | None = typer.Option(None, "--frames", help="Number of frames (default: to the end)."),
+    fps: float = typer.Option(30.0, "--fps", help="Frame rate the motion is resampled to."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --out folder."),
+) -> None:
+    """Render MOTION performed by a character, framed by the world's framing rule."""
+    from rich.progress import Progress
+
+    from pose_io.atomic import check_new_output
+    from pose_io.errors import InputError
+    from retarget.world.appearance import get_character
+    from retarget.world.render import save_performance
+    from retarget.world.rigs import load_motion
+
+    check_new_output(out, overwrite)
+    if size < 16:
+        raise InputError(f"--size must be at least 16 pixels, got {size}")
+    skeleton, look, seed = get_character(character)
+    clip = load_motion(motion, fps=fps)
+    if not 0 <= start < clip.num_frames:
+        raise InputError(f"{motion}: --start {start} is outside its {clip.num_frames} frames at {fps:g} fps")
+    if frames is not None and not 1 <= frames <= clip.num_frames - start:
+        raise InputError(f"{motion}: --frames {frames} does not fit: {clip.num_frames - start} frames from --start {start}")
+    count = (clip.num_frames - start) if frames is None else frames
+    extra = {"character": {"requested": character, "seed": seed}}
+    with Progress(console=console, transient=True) as progress:
+        task = progress.add_task(f"rendering {clip.name}", total=count)
+        save_performance(out, clip, skeleton, look, yaw, pitch, size, start, frames, overwrite=overwrite,
+                         extra_meta=extra, on_frame=lambda _: progress.advance(task))
+    typer.echo(f"wrote {out} ({count} frames, {size}x{size}, {skeleton.name} as {look.name})")
+
+
+@synth_app.command("characters")
+@user_errors
+def characters_command() -> None:
+    """List the named characters: height, proportions and look."""
+    from retarget.world.appearance import get_character
+    from retarget.world.skeleton import NAMED_CHARACTERS
+
+    for name in NAMED_CHARACTERS:
+        skeleton, look, _ = get_character(name)
+        d = skeleton.as_dict()
+        arm = d["l_elbow"] + d["l_wrist"]
+        typer.echo(
+            f"{name:<16} height {skeleton.height:.2f} m  legs {skeleton.leg_length:.2f} m "
+            f"({skeleton.leg_length / skeleton.height:.2f} H)  torso {d['neck']:.2f} m  arms {arm:.2f} m  "
+            f"shoulders {d['l_shoulder'] + d['r_shoulder']:.2f} m  | {_SLEEVES[look.sleeves]} {look.pattern} top, "
+            f"{look.bottom_style}, {look.hair_style} hair"
+        )
+    typer.echo("or any integer seed: a sampled skeleton and look")
