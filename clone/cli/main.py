@@ -36,6 +36,8 @@ def _root(
 
 
 # Verb groups register below, one line each, as they land.
+from clone.cli.world import world_app  # noqa: E402
+app.add_typer(world_app, name="world")
 from clone.cli.synth import synth_app  # noqa: E402
 app.add_typer(synth_app, name="synth")
 from clone.cli import cloning  # noqa: E402

@@ -1,0 +1,73 @@
+"""`clone world ...`: the motion world (mocap replayed on many characters and views) used for training."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import typer
+
+from clone.cli.common import console, user_errors
+
+world_app = typer.Typer(no_args_is_help=True, help="Build and inspect the motion world used for training.")
+
+
+@world_app.command("build")
+@user_errors
+def build(
+    mocap: Path = typer.Option(..., "--mocap", help="Folder of .bvh / .bvh.gz / .amc files (searched recursively)."),
+    cache: Path = typer.Option(None, "--cache", help="Cache folder [default: ~/.cache/clone2d/world]."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the motion split and the characters."),
+    fps: float = typer.Option(30.0, "--fps", help="Frame rate every clip is resampled to."),
+    train_characters: int = typer.Option(64, "--train-characters", min=1, help="Sampled training characters."),
+    val_characters: int = typer.Option(8, "--val-characters", min=1, help="Sampled validation characters."),
+    test_characters: int = typer.Option(8, "--test-characters", min=1, help="Sampled test characters (+ named)."),
+    window: int = typer.Option(64, "--window", min=2, help="Window length in frames."),
+    stride: int = typer.Option(32, "--stride", min=1, help="Step between windows."),
+    rebuild: bool = typer.Option(False, "--rebuild", help="Build again even if the cache has this world."),
+) -> None:
+    """Build (or open from the cache) the motion world and print its summary."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from retarget.world import MotionWorld
+
+    started = time.perf_counter()
+    with Progress(
+        TextColumn("loading mocap"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+        TextColumn("{task.description}"), console=console, transient=True,
+    ) as bar:
+        task = bar.add_task("", total=None)
+
+        def progress(done: int, total: int, what: str) -> None:
+            bar.update(task, completed=done, total=total, description=what)
+
+        world = MotionWorld.build(
+            mocap, cache, seed=seed, fps=fps, n_train_characters=train_characters,
+            n_val_characters=val_characters, n_test_characters=test_characters, window=window, stride=stride,
+            rebuild=rebuild, progress=progress,
+        )
+    elapsed = time.perf_counter() - started
+    summary = world.summary()
+
+    cols = ("split", "clips", "motions", "frames", "windows", "chars", "views", "samples", "height m", "3D MB")
+    rows = [cols]
+    for name, s in summary["splits"].items():
+        lo, hi = s["height_range_m"]
+        rows.append((
+            name, str(s["clips"]), str(s["motions"]), str(s["frames"]), str(s["windows"]), str(s["characters"]),
+            str(s["views"]), f"{s['samples']:,}", f"{lo:.2f}-{hi:.2f}", f"{s['positions_mb']:.0f}",
+        ))
+    widths = [max(len(r[k]) for r in rows) for k in range(len(cols))]
+    typer.echo(f"motion world: {summary['fps']:g} fps, windows of {summary['window']} frames, stride {summary['stride']}")
+    for r in rows:
+        typer.echo("  ".join(v.rjust(w) for v, w in zip(r, widths)))
+    for source, s in summary["sources"].items():
+        typer.echo(f"source {source}: {s['clips']} clips, {s['frames']} frames")
+    if summary["skipped"]:
+        typer.echo(f"skipped {len(summary['skipped'])} files:")
+        for item in summary["skipped"]:
+            typer.echo(f"  {item['path']}: {item['reason']}")
+    typer.echo(f"views: yaw {summary['view_yaws'][0]:g}..{summary['view_yaws'][-1]:g} deg in {summary['views']} bins, "
+               f"pitch +-{summary['pitch_range_deg']:g} deg")
+    typer.echo(f"built in {summary['build_seconds']:.1f} s; this run took {elapsed:.1f} s")
+    typer.echo(f"cache: {summary['cache']}")

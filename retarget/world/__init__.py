@@ -1,0 +1,40 @@
+"""The motion world: real motion capture replayed on many synthetic skeletons and seen from many views.
+
+Numpy only (no torch): ``retarget`` training code turns the arrays into tensors itself.
+
+- ``load_motion``: BVH / AMC of known rigs -> ``Motion3D`` on the canonical 18-joint skeleton.
+- ``Skeleton``, ``sample_skeleton``, ``NAMED_CHARACTERS``, ``skeleton_of``, ``retarget_3d``: characters.
+- ``Camera``, ``frame_camera``, ``facing_angle``, ``project``, ``VIEW_YAWS``: views and the framing rule.
+- ``MotionWorld``: the cached dataset of labelled (motion, character, view) windows.
+"""
+
+from retarget.world.camera import (
+    CANVAS_SIZE,
+    MAX_PITCH,
+    VIEW_YAWS,
+    Camera,
+    facing_angle,
+    frame_camera,
+    ground_origin,
+    project,
+)
+from retarget.world.dataset import MotionWorld, WindowLabel, WorldSplit, default_cache_dir
+from retarget.world.rigs import RIGS, load_motion
+from retarget.world.skeleton import (
+    BONES,
+    NAMED_CHARACTERS,
+    WORLD_JOINTS,
+    Motion3D,
+    Skeleton,
+    make_skeleton,
+    retarget_3d,
+    sample_skeleton,
+    skeleton_of,
+)
+
+__all__ = [
+    "BONES", "CANVAS_SIZE", "Camera", "MAX_PITCH", "Motion3D", "MotionWorld", "NAMED_CHARACTERS", "RIGS",
+    "Skeleton", "VIEW_YAWS", "WORLD_JOINTS", "WindowLabel", "WorldSplit", "default_cache_dir", "facing_angle",
+    "frame_camera", "ground_origin", "load_motion", "make_skeleton", "project", "retarget_3d",
+    "sample_skeleton", "skeleton_of",
+]

@@ -1,0 +1,149 @@
+"""Weak-perspective cameras for the motion world, the view bins and the one framing rule.
+
+Angles are relative to the character: the view yaw is measured from the direction the character faces
+on average (``facing_angle``), as in Aberman et al. 2019. Yaw 0 sees the face, +90 the character's own
+left side (the character then faces image left), -90 its right side. Positive pitch puts the camera
+above the character, looking down.
+
+Projection (``project``): rotate world points about the origin by the facing and the view, then
+``x = tx + scale * X``, ``y = ty - scale * Y`` (pixels, x right, y down) and ``depth = -Z`` (metres,
+larger = farther from the camera). A ``Motion3D`` has its first root over the origin on the ground, so
+``(tx, ty)`` is where the ground under the clip's first root lands.
+
+Framing rule (``frame_camera``), used for training data, the renderer and evaluation alike: on a
+W x H canvas the ground point under the first root is at ``(W / 2, 0.9 H)`` and the scale is
+``0.36 H`` pixels per metre (a 1.75 m person is 323 px tall on a 512 px canvas). Rendering the reference
+character with the driver's motion through ``frame_camera(yaw, pitch, size)`` is therefore exactly the
+ground truth of a cloning run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from retarget.world.skeleton import Motion3D, joint_index
+
+FRAME_GROUND = 0.90
+FRAME_SCALE = 0.36
+CANVAS_SIZE = (512, 512)
+
+# Discrete views for the triplet loss: 13 yaw bins of 15 degrees from -90 to +90.
+VIEW_YAWS: tuple[float, ...] = tuple(float(v) for v in range(-90, 91, 15))
+MAX_PITCH = 10.0
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A weak-perspective camera.
+
+    Attributes:
+        yaw_deg: view angle around the character relative to its facing (0 = front, +90 = its left).
+        pitch_deg: elevation (+ = from above, looking down).
+        roll_deg: rotation of the image about the view axis (+ = counter-clockwise on screen).
+        scale: pixels per metre.
+        tx: pixel x of the origin (the ground under the clip's first root).
+        ty: pixel y of the origin: the ground line.
+    """
+
+    yaw_deg: float = 0.0
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+    scale: float = FRAME_SCALE * CANVAS_SIZE[1]
+    tx: float = CANVAS_SIZE[0] / 2
+    ty: float = FRAME_GROUND * CANVAS_SIZE[1]
+
+    def rotation(self, facing_deg: float = 0.0) -> np.ndarray:
+        """[3, 3] world -> camera rotation: ``Rz(roll) @ Rx(pitch) @ Ry(-(yaw + facing))``."""
+        return view_rotation(self.yaw_deg + facing_deg, self.pitch_deg, self.roll_deg)
+
+
+def view_rotation(yaw_deg: float, pitch_deg: float = 0.0, roll_deg: float = 0.0) -> np.ndarray:
+    """[3, 3] rotation taking the camera direction (yaw about Y from +Z, pitch up) to +Z."""
+    y, p, r = (math.radians(v) for v in (yaw_deg, pitch_deg, roll_deg))
+    ry = np.array([[math.cos(-y), 0, math.sin(-y)], [0, 1, 0], [-math.sin(-y), 0, math.cos(-y)]])
+    rx = np.array([[1, 0, 0], [0, math.cos(p), -math.sin(p)], [0, math.sin(p), math.cos(p)]])
+    rz = np.array([[math.cos(r), -math.sin(r), 0], [math.sin(r), math.cos(r), 0], [0, 0, 1]])
+    return rz @ rx @ ry
+
+
+def frame_camera(
+    yaw_deg: float, pitch_deg: float = 0.0, size: tuple[int, int] = CANVAS_SIZE, roll_deg: float = 0.0
+) -> Camera:
+    """The framing rule: ground under the first root at (W/2, 0.9 H), 0.36 H pixels per metre.
+
+    Args:
+        yaw_deg: view yaw relative to the character's facing.
+        pitch_deg: camera elevation.
+        size: canvas (width, height) in pixels.
+        roll_deg: image roll.
+    """
+    w, h = size
+    return Camera(yaw_deg, pitch_deg, roll_deg, scale=FRAME_SCALE * h, tx=w / 2.0, ty=FRAME_GROUND * h)
+
+
+def facing_vectors(positions: np.ndarray) -> np.ndarray:
+    """[T, 2] unit (x, z) facing direction per frame, from the hips' and shoulders' left-right axis.
+
+    Args:
+        positions: [T, 18, 3] world joints (Y up).
+    """
+    left = (
+        positions[:, joint_index("l_hip")] - positions[:, joint_index("r_hip")]
+        + positions[:, joint_index("l_shoulder")] - positions[:, joint_index("r_shoulder")]
+    )
+    # forward = left x up, with up = +Y: (-left_z, 0, left_x).
+    fwd = np.stack([-left[:, 2], left[:, 0]], axis=-1).astype(np.float64)
+    norm = np.linalg.norm(fwd, axis=-1, keepdims=True)
+    return fwd / np.maximum(norm, 1e-9)
+
+
+def facing_angle(motion: Motion3D | np.ndarray) -> float:
+    """The character's average facing over the clip, in degrees about +Y (0 = facing +Z, 90 = +X).
+
+    Args:
+        motion: a ``Motion3D`` or its [T, 18, 3] positions.
+    """
+    pos = motion.positions if isinstance(motion, Motion3D) else np.asarray(motion)
+    fwd = facing_vectors(pos).mean(axis=0)
+    return math.degrees(math.atan2(fwd[0], fwd[1]))
+
+
+def project(
+    positions: np.ndarray,
+    camera: Camera,
+    facing_deg: float = 0.0,
+    origin: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Weak-perspective projection.
+
+    Args:
+        positions: [..., 3] world points in metres (Y up), e.g. [T, K, 3].
+        camera: the camera.
+        facing_deg: the character's facing (``facing_angle``); the view yaw is added to it.
+        origin: [3] world point that lands on ``(tx, ty)``; default the world origin (the ground under
+            a ``Motion3D``'s first root).
+
+    Returns:
+        ``(xy [..., 2] float32 pixels x right y down, depth [...] float32 metres, larger = farther)``.
+    """
+    pts = np.asarray(positions, dtype=np.float64)
+    if origin is not None:
+        pts = pts - np.asarray(origin, dtype=np.float64)
+    cam = pts @ camera.rotation(facing_deg).T  # [..., 3] camera coordinates, Y up, +Z toward the camera
+    xy = np.stack([camera.tx + camera.scale * cam[..., 0], camera.ty - camera.scale * cam[..., 1]], axis=-1)
+    return xy.astype(np.float32), (-cam[..., 2]).astype(np.float32)
+
+
+def ground_origin(positions: np.ndarray) -> np.ndarray:
+    """[3] the ground point (y = 0) under the first frame's root of [T, 18, 3] positions."""
+    root = np.asarray(positions[0, joint_index("mid_hip")], dtype=np.float64)
+    return np.array([root[0], 0.0, root[2]])
+
+
+__all__ = [
+    "CANVAS_SIZE", "Camera", "FRAME_GROUND", "FRAME_SCALE", "MAX_PITCH", "VIEW_YAWS", "facing_angle",
+    "facing_vectors", "frame_camera", "ground_origin", "project", "view_rotation",
+]
