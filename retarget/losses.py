@@ -1,0 +1,174 @@
+"""The training objective of Aberman et al. 2019.
+
+For two triples (m1, c1, v1), (m2, c2, v2) the network encodes both, decodes all combinations of their
+motion, skeleton and view codes and compares each with the ground-truth window of that combination
+(reconstruction for the two originals, cross reconstruction for the other six). A triplet loss pulls
+the codes of windows sharing a motion (skeleton, view) together and pushes the other triple's away, and
+a foot-velocity loss matches the global velocity of the ankles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from retarget.augment import COMBOS, MOTION, SKELETON, VIEW, combo_index
+from retarget.model import RetargetNet
+from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints
+
+
+@dataclass(frozen=True)
+class LossConfig:
+    """Terms and weights of the objective (defaults: the paper's).
+
+    Attributes:
+        cross: decode the cross combinations (False: plain reconstruction of the two inputs).
+        triplet: add the triplet loss on motion and static codes.
+        triplet_margin: its margin.
+        triplet_weight: its weight.
+        foot_weight: weight of the foot-velocity loss (0 = off).
+    """
+
+    cross: bool = True
+    triplet: bool = True
+    triplet_margin: float = 0.3
+    triplet_weight: float = 0.1
+    foot_weight: float = 0.5
+
+
+# Ablations of the paper's objective, by name.
+ABLATIONS: dict[str, LossConfig] = {
+    "full": LossConfig(),
+    "no-triplet": LossConfig(triplet=False),
+    "recon-triplet": LossConfig(cross=False),
+}
+
+
+def ablation_config(name: str) -> LossConfig:
+    """Loss settings of a named ablation; an unknown name raises ValueError listing the valid ones."""
+    try:
+        return ABLATIONS[name]
+    except KeyError:
+        raise ValueError(f"unknown ablation {name!r}; valid: {', '.join(ABLATIONS)}") from None
+
+
+def foot_velocity(x: torch.Tensor, stats: NormStats, min_scale: float = 1.0) -> torch.Tensor:
+    """Global ankle velocity in units of the root-velocity std: [B, 30, T] -> [B, T-1, 2, 2].
+
+    Those are the units of the velocity channels, so the term weighs like the reconstruction; the std
+    is floored at ``min_scale`` canvas pixels per frame for data whose root hardly moves.
+    """
+    joints = channels_to_joints(x, stats)[:, :, LAYOUT.indices(FEET)]  # [B, T, 2, 2]
+    scale = torch.tensor(np.maximum(stats.velocity_std, min_scale), dtype=x.dtype, device=x.device)
+    return (joints[:, 1:] - joints[:, :-1]) / scale
+
+
+def used_combos(model: RetargetNet, cross: bool) -> list[int]:
+    """Combinations a model is trained on.
+
+    A code the model lacks is shared by both triples of its samples, so only combinations that take it
+    from the motion's triple are distinct; without ``cross`` only the two original triples remain.
+    """
+    has = {SKELETON: model.body_encoder is not None, VIEW: model.view_encoder is not None}
+    combos = [0, combo_index(1, 1, 1)]
+    if cross:
+        combos = [
+            k for k, c in enumerate(COMBOS) if all(has[f] or c[f] == c[MOTION] for f in (SKELETON, VIEW))
+        ]
+    return combos
+
+
+def _codes(model: RetargetNet, x: torch.Tensor) -> dict[int, torch.Tensor]:
+    codes = {MOTION: model.encode_motion(x)}
+    if model.body_encoder is not None:
+        codes[SKELETON] = model.encode_body(x)
+    if model.view_encoder is not None:
+        codes[VIEW] = model.encode_view(x)
+    return codes
+
+
+def objective(
+    model: RetargetNet, inputs: torch.Tensor, targets: torch.Tensor, stats: NormStats, config: LossConfig
+) -> dict[str, torch.Tensor]:
+    """Losses of one batch of 8-combination samples.
+
+    Args:
+        model: the network (train or eval mode).
+        inputs: [B, 8, 30, T] normalised network inputs (corrupted), combination order :data:`COMBOS`.
+        targets: [B, 8, 30, T] normalised ground truth.
+        stats: normalisation statistics (for the foot velocity).
+        config: loss terms and weights.
+
+    Returns:
+        Named loss terms (already weighted) and their sum under ``"total"``.
+    """
+    b = inputs.shape[0]
+    first, second = 0, combo_index(1, 1, 1)
+    both = _codes(model, torch.cat([inputs[:, first], inputs[:, second]]))  # each [2B, C, ...]
+    triple = {f: code.reshape(2, b, *code.shape[1:]) for f, code in both.items()}  # [2, B, C, ...]
+
+    combos = used_combos(model, config.cross)
+    def pick(factor: int) -> torch.Tensor | None:
+        if factor not in triple:
+            return None
+        index = torch.tensor([COMBOS[k][factor] for k in combos], device=inputs.device)
+        return triple[factor][index].flatten(0, 1)  # [K * B, C, ...]
+
+    out = model.decode(pick(MOTION), pick(SKELETON), pick(VIEW)).reshape(len(combos), b, *targets.shape[2:])
+    truth = targets[:, combos].transpose(0, 1)  # [K, B, 30, T]
+    per_combo = ((out - truth) ** 2).mean(dim=(1, 2, 3))  # [K]
+    own = torch.tensor([k in (first, second) for k in combos], device=inputs.device)
+    losses = {"rec": per_combo[own].sum()}
+    if config.cross:
+        losses["cross"] = per_combo[~own].sum()
+    if config.foot_weight > 0:
+        flat_out, flat_truth = out.flatten(0, 1), truth.flatten(0, 1)
+        foot = ((foot_velocity(flat_out, stats) - foot_velocity(flat_truth, stats)) ** 2)
+        losses["foot"] = config.foot_weight * foot.reshape(len(combos), -1).mean(dim=1).sum()
+    if config.triplet:
+        losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
+    losses["total"] = sum(losses.values())
+    return losses
+
+
+def _triplet(
+    model: RetargetNet, inputs: torch.Tensor, triple: dict[int, torch.Tensor], margin: float
+) -> torch.Tensor:
+    """For each code and each triple t: the code of the window sharing only that factor with triple t
+    (anchor) should be nearer to triple t's code (positive) than to the other triple's (negative)."""
+    total = inputs.new_zeros(())
+    for factor in triple:
+        anchors = []
+        for t in (0, 1):
+            combo = [1 - t] * 3
+            combo[factor] = t
+            anchors.append(inputs[:, combo_index(*combo)])
+        anchor = _codes(model, torch.cat(anchors))[factor].flatten(1)  # [2B, D]
+        own = triple[factor].flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
+        other = triple[factor].flip(0).flatten(2).flatten(0, 1)
+        total = total + 2 * F.triplet_margin_loss(anchor, own, other, margin=margin)
+    return total
+
+
+def self_reconstruction(
+    model: RetargetNet, inputs: torch.Tensor, targets: torch.Tensor, stats: NormStats, config: LossConfig
+) -> dict[str, torch.Tensor]:
+    """Losses of unlabelled windows (real tracks): reconstruction from their own codes.
+
+    Args:
+        model: the network.
+        inputs: [B, 30, T] corrupted inputs.
+        targets: [B, 30, T] clean windows.
+        stats: normalisation statistics.
+        config: loss weights (the foot term is used).
+    """
+    out = model(inputs)
+    losses = {"rec": ((out - targets) ** 2).mean()}
+    if config.foot_weight > 0:
+        foot = (foot_velocity(out, stats) - foot_velocity(targets, stats)) ** 2
+        losses["foot"] = config.foot_weight * foot.mean()
+    losses["total"] = sum(losses.values())
+    return losses

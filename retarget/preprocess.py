@@ -1,0 +1,308 @@
+"""Network input of the retargeting model, and the pose maths around it.
+
+Conventions of Aberman et al. 2019 (and of their released weights):
+
+* Poses are body15 joints (the first 15 BODY_25 joints) in a canvas ``canvas_height`` (512) pixels high:
+  a track is scaled by ``canvas_height / image_height``.
+* The network sees ``[B, 30, T]``: 15 rows of (x, y) pairs, channel ``2r`` = x and ``2r + 1`` = y of row
+  ``r``. Rows 0-13 are the joints other than MidHip minus MidHip of the same frame, in body15 order; row
+  14 is the MidHip velocity ``v[t] = root[t] - root[t - 1]`` with ``v[0] = 0``. Every row is normalised
+  with per-row mean/std statistics (:class:`NormStats`). Channels 0-27 (the pose) feed the skeleton and
+  view encoders; channels 28-29 (the velocity) only the motion encoder.
+
+:func:`joints_to_channels` builds that tensor and :func:`channels_to_joints` undoes it; everything else
+reaches channel groups through :func:`pose_channels` and :func:`velocity_channels`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import warnings
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+import torch
+from scipy.ndimage import gaussian_filter1d
+
+from pose_io.errors import InputError
+from pose_io.layouts import BODY15, get_layout, require_convertible
+from pose_io.track import PoseTrack
+
+LAYOUT = BODY15
+ROOT = "mid_hip"
+ROOT_INDEX = LAYOUT.index(ROOT)
+# Rows 0-13 of the network input: every body15 joint but the root, in layout order.
+LOCAL_JOINTS: tuple[str, ...] = tuple(n for n in LAYOUT.joints if n != ROOT)
+LOCAL_INDEX: tuple[int, ...] = tuple(LAYOUT.indices(LOCAL_JOINTS))
+NUM_ROWS = len(LOCAL_JOINTS) + 1  # + the root velocity row
+NUM_CHANNELS = 2 * NUM_ROWS  # 30
+POSE_CHANNELS = 2 * len(LOCAL_JOINTS)  # 28
+FEET: tuple[str, ...] = ("r_ankle", "l_ankle")
+
+
+@dataclass(frozen=True)
+class PreprocessConfig:
+    """How tracks are brought into (and out of) the network's canvas; the authors' demo settings.
+
+    Attributes:
+        canvas_height: height of the canvas the network works in; a track is scaled by
+            ``canvas_height / image_height``.
+        input_sigma: Gaussian smoothing over time (frames) of input tracks after gap filling (0 = off).
+        output_sigma: Gaussian smoothing over time of retargeted tracks (0 = off).
+    """
+
+    canvas_height: float = 512.0
+    input_sigma: float = 2.0
+    output_sigma: float = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class NormStats:
+    """Per-row normalisation statistics of the network input.
+
+    Attributes:
+        mean: [15, 2] float64, rows as in the module docstring (14 local joints, then root velocity).
+        std: [15, 2] float64, all positive.
+    """
+
+    mean: np.ndarray
+    std: np.ndarray
+
+    def __post_init__(self) -> None:
+        mean = np.array(self.mean, dtype=np.float64)
+        std = np.array(self.std, dtype=np.float64)
+        if mean.shape != (NUM_ROWS, 2) or std.shape != (NUM_ROWS, 2):
+            raise InputError(
+                f"normalisation statistics must be [{NUM_ROWS}, 2], got {mean.shape} and {std.shape}"
+            )
+        if not (np.isfinite(mean).all() and np.isfinite(std).all() and (std > 0).all()):
+            raise InputError("normalisation statistics are not finite or have a non-positive std")
+        mean.setflags(write=False)
+        std.setflags(write=False)
+        object.__setattr__(self, "mean", mean)
+        object.__setattr__(self, "std", std)
+
+    def channel_tensors(self, like: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Mean and std as ``[1, 30, 1]`` tensors with ``like``'s dtype and device."""
+        mean = torch.tensor(self.mean.reshape(1, NUM_CHANNELS, 1), dtype=like.dtype, device=like.device)
+        std = torch.tensor(self.std.reshape(1, NUM_CHANNELS, 1), dtype=like.dtype, device=like.device)
+        return mean, std
+
+    @property
+    def velocity_std(self) -> np.ndarray:
+        """[2] std of the root velocity row (pixels per frame)."""
+        return self.std[-1]
+
+
+def _rows(joints: torch.Tensor) -> torch.Tensor:
+    """[B, T, 15, 2] joints -> [B, T, 15, 2] rows (14 root-relative joints, then root velocity)."""
+    root = joints[:, :, ROOT_INDEX]  # [B, T, 2]
+    local = joints[:, :, list(LOCAL_INDEX)] - root[:, :, None]  # [B, T, 14, 2]
+    velocity = torch.zeros_like(root)
+    velocity[:, 1:] = root[:, 1:] - root[:, :-1]
+    return torch.cat([local, velocity[:, :, None]], dim=2)
+
+
+def joints_to_channels(joints: torch.Tensor, stats: NormStats) -> torch.Tensor:
+    """The normalised network input of body15 poses.
+
+    Args:
+        joints: [B, T, 15, 2] body15 coordinates in the network's canvas (no NaN).
+        stats: normalisation statistics.
+
+    Returns:
+        [B, 30, T] tensor (channel ``2r + c`` = coordinate ``c`` of row ``r``).
+    """
+    b, t = joints.shape[:2]
+    rows = _rows(joints)  # [B, T, 15, 2]
+    x = rows.reshape(b, t, NUM_CHANNELS).transpose(1, 2)  # [B, 30, T]
+    mean, std = stats.channel_tensors(x)
+    return (x - mean) / std
+
+
+def channels_to_joints(x: torch.Tensor, stats: NormStats, start: torch.Tensor | None = None) -> torch.Tensor:
+    """Undo :func:`joints_to_channels`: body15 poses whose root follows the integrated velocity.
+
+    The root of frame ``t`` is ``start + v[0] + ... + v[t]`` (the authors' convention, ``v[0]`` included).
+
+    Args:
+        x: [B, 30, T] normalised network output or input.
+        stats: normalisation statistics.
+        start: [B, 2] or [2] start point of the root trajectory; default 0.
+
+    Returns:
+        [B, T, 15, 2] body15 coordinates in the canvas.
+    """
+    b, _, t = x.shape
+    mean, std = stats.channel_tensors(x)
+    rows = (x * std + mean).transpose(1, 2).reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
+    root = torch.cumsum(rows[:, :, -1], dim=1)  # [B, T, 2]
+    if start is not None:
+        root = root + torch.as_tensor(start, dtype=x.dtype, device=x.device).reshape(-1, 1, 2)
+    joints = x.new_zeros(b, t, len(LAYOUT), 2)
+    joints[:, :, list(LOCAL_INDEX)] = rows[:, :, :-1]
+    return joints + root[:, :, None]
+
+
+def pose_channels(x: torch.Tensor) -> torch.Tensor:
+    """[B, 30, T] -> [B, 28, T], the root-relative pose (what the static encoders see)."""
+    return x[:, :POSE_CHANNELS]
+
+
+def velocity_channels(x: torch.Tensor) -> torch.Tensor:
+    """[B, 30, T] -> [B, 2, T], the root velocity."""
+    return x[:, POSE_CHANNELS:]
+
+
+def row_statistics(windows: np.ndarray, min_std: float = 1.0) -> NormStats:
+    """Normalisation statistics of body15 windows (mean/std of every row over all frames).
+
+    Args:
+        windows: [N, T, 15, 2] body15 coordinates in the canvas.
+        min_std: floor of the std in canvas pixels: a coordinate that hardly varies in the training data
+            (a rigid pelvis seen from the front) must not turn a pixel of detection noise into a huge input.
+    """
+    rows = _rows(torch.as_tensor(np.asarray(windows, dtype=np.float64))).numpy()  # [N, T, 15, 2]
+    flat = rows.reshape(-1, NUM_ROWS, 2)
+    return NormStats(flat.mean(axis=0), np.maximum(flat.std(axis=0), min_std))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Real tracks: layout, gaps, smoothing, canvas.
+
+
+def to_body15(track: PoseTrack, name: str = "track") -> PoseTrack:
+    """``track`` in body15; InputError when its layout cannot give all body15 joints."""
+    try:
+        require_convertible(get_layout(track.layout), LAYOUT)
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+    return track.to_layout(LAYOUT.name)
+
+
+def hold_fill(joints: np.ndarray) -> np.ndarray:
+    """Fill missing joints from the previous frame, then leading gaps from the next (the authors' rule).
+
+    Args:
+        joints: [T, J, 2] with NaN where missing; every joint seen at least once.
+
+    Returns:
+        [T, J, 2] without NaN.
+    """
+    t = joints.shape[0]
+    seen = ~np.isnan(joints[..., 0])  # [T, J]
+    frame = np.where(seen, np.arange(t)[:, None], -1)
+    last = np.maximum.accumulate(frame, axis=0)  # index of the last seen frame, -1 before the first
+    first = np.argmax(seen, axis=0)  # [J] first seen frame
+    source = np.where(last >= 0, last, first[None, :])  # [T, J]
+    return np.take_along_axis(joints, source[..., None], axis=0)
+
+
+def smooth(joints: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian filter over time (axis 0), reflecting at the ends; ``sigma`` in frames (0 = copy)."""
+    if sigma <= 0:
+        return joints.copy()
+    return gaussian_filter1d(joints, sigma=sigma, axis=0, mode="reflect")
+
+
+def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig) -> float:
+    """Factor from a track's pixels to the network canvas."""
+    return config.canvas_height / float(image_size[1])
+
+
+def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> np.ndarray:
+    """A real track as clean body15 poses in the network canvas (the authors' preprocessing).
+
+    Converts to body15, fills gaps (:func:`hold_fill`), smooths over time and scales by
+    ``canvas_height / image_height``.
+
+    Args:
+        track: any layout that can give body15.
+        config: preprocessing settings.
+        name: how error messages call the track.
+
+    Returns:
+        [T, 15, 2] float64 canvas coordinates.
+
+    Raises:
+        InputError: layout not convertible, no joint detected at all, or a joint never detected.
+    """
+    body = to_body15(track, name)
+    joints = body.joints.astype(np.float64)
+    seen = ~np.isnan(joints[..., 0])
+    if not seen.any():
+        raise InputError(f"{name}: no joints detected in any of its {len(body)} frames")
+    never = [LAYOUT.joints[j] for j in np.flatnonzero(~seen.any(axis=0))]
+    if never:
+        raise InputError(f"{name}: joints never detected in any frame: {', '.join(never)}")
+    return smooth(hold_fill(joints), config.input_sigma) * canvas_scale(body.image_size, config)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Where a person stands: height, root position, ground line.
+
+
+def pose_heights(joints: np.ndarray) -> np.ndarray:
+    """[T, J, 2] -> [T] vertical extent of each pose (NaN-aware; NaN for an empty frame)."""
+    y = joints[..., 1]
+    with _quiet_nan():
+        return np.nanmax(y, axis=1) - np.nanmin(y, axis=1)
+
+
+def ground_heights(joints: np.ndarray) -> np.ndarray:
+    """[T, 15, 2] body15 -> [T] y of the lower ankle (image y grows downwards)."""
+    with _quiet_nan():
+        return np.nanmax(joints[:, LAYOUT.indices(FEET), 1], axis=1)
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Where a person stands in their video, in that video's pixels.
+
+    Attributes:
+        height: median vertical extent of the pose.
+        root_x: median x of the root (MidHip).
+        ground_y: median y of the lower ankle.
+    """
+
+    height: float
+    root_x: float
+    ground_y: float
+
+
+def placement_of(joints: np.ndarray, name: str = "track") -> Placement:
+    """Placement statistics of [T, 15, 2] body15 joints (NaN allowed).
+
+    Raises:
+        InputError: the root or both ankles are never seen.
+    """
+    with _quiet_nan():
+        height = float(np.nanmedian(pose_heights(joints)))
+        root_x = float(np.nanmedian(joints[:, ROOT_INDEX, 0]))
+        ground_y = float(np.nanmedian(ground_heights(joints)))
+    if not all(np.isfinite(v) for v in (height, root_x, ground_y)):
+        raise InputError(f"{name}: cannot tell where the person stands (root or ankles never detected)")
+    return Placement(height, root_x, ground_y)
+
+
+def place(joints: np.ndarray, target: Placement) -> np.ndarray:
+    """Translate a pose sequence so its median root x and median ground line match ``target``.
+
+    Args:
+        joints: [T, 15, 2] body15 coordinates (no NaN).
+        target: where the person should stand.
+
+    Returns:
+        [T, 15, 2] translated copy.
+    """
+    here = placement_of(joints)
+    return joints + np.array([target.root_x - here.root_x, target.ground_y - here.ground_y])
+
+
+@contextlib.contextmanager
+def _quiet_nan() -> Iterator[None]:
+    """Silence numpy's all-NaN-slice warnings inside a block (the NaN results are handled)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", category=RuntimeWarning)
+        yield

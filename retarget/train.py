@@ -1,0 +1,578 @@
+"""Training the retargeting network on the synthetic motion world (Aberman et al. 2019, Sec. 4-5).
+
+Each sample draws two (motion, character, view) triples from a split of :mod:`retarget.world` and the
+windows of all 8 combinations; the batch is augmented (:mod:`retarget.augment`) and the objective of
+:mod:`retarget.losses` is minimised with AMSGrad. Optional real tracks (OpenPose folders) add a
+self-reconstruction term. One checkpoint file (:mod:`retarget.checkpoint`) is rewritten atomically after
+every epoch and when the time budget ends; ``resume=True`` continues it exactly where it stopped.
+
+The split interface used here (the motion world provides it)::
+
+    split.num_motions, split.num_characters, split.num_views
+    split.window(motion, character, view, length=64, offset=0, rng=None) -> [length, 15, 2] float32
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterator, Protocol, Sequence
+
+import numpy as np
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+from retarget.augment import COMBOS, AugmentConfig, augment_targets, corrupt_inputs
+from retarget.checkpoint import load_checkpoint, save_checkpoint
+from retarget.losses import LossConfig, objective, self_reconstruction
+from retarget.model import RetargetNet, variant_config
+from retarget.preprocess import NormStats, PreprocessConfig, joints_to_channels, prepare_track, row_statistics
+from retarget.runtime import resolve_device
+
+log = logging.getLogger(__name__)
+
+DEFAULT_EPOCHS = 300  # the authors' schedule, used when neither epochs nor minutes are given
+
+
+class WorldSplit(Protocol):
+    """What training needs from a split of the motion world."""
+
+    num_motions: int
+    num_characters: int
+    num_views: int
+
+    def window(
+        self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
+        rng: np.random.Generator | None = None,
+    ) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that decides what is learned (defaults: the paper's / the authors' settings).
+
+    Attributes:
+        variant: network variant (:data:`retarget.model.VARIANTS`).
+        window: frames per training window (the longest clip length).
+        batch_size: samples per step (each sample has 8 windows).
+        lr: Adam learning rate.
+        amsgrad: use the AMSGrad variant.
+        lr_decay: learning-rate factor per epoch.
+        samples_per_epoch: random samples per epoch (validation and a checkpoint follow every epoch).
+        val_samples: fixed validation samples (from the "val" split).
+        stats_windows: random training windows the normalisation statistics are computed from.
+        real_batch_size: real-track windows per step (when real tracks are given).
+        real_weight: weight of their self-reconstruction loss.
+        seed: seed of every random choice.
+        augment: augmentation settings.
+        loss: objective settings (see :data:`retarget.losses.ABLATIONS`).
+        preprocess: canvas and smoothing used at inference (stored in the checkpoint).
+    """
+
+    variant: str = "full"
+    window: int = 64
+    batch_size: int = 64
+    lr: float = 1e-3
+    amsgrad: bool = True
+    lr_decay: float = 0.99
+    samples_per_epoch: int = 6400
+    val_samples: int = 256
+    stats_windows: int = 2048
+    real_batch_size: int = 16
+    real_weight: float = 1.0
+    seed: int = 0
+    augment: AugmentConfig = AugmentConfig()
+    loss: LossConfig = LossConfig()
+    preprocess: PreprocessConfig = PreprocessConfig()
+
+    def __post_init__(self) -> None:
+        variant_config(self.variant)  # ValueError for an unknown name
+        if self.window % 8 or max(self.augment.clip_lengths) > self.window:
+            raise ValueError("window must be a multiple of 8 and at least every clip length")
+        if self.batch_size <= 0:
+            raise ValueError("batch_size must be positive")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dict (lists for tuples)."""
+        def plain(value: Any) -> Any:
+            if isinstance(value, dict):
+                return {k: plain(v) for k, v in value.items()}
+            return list(value) if isinstance(value, tuple) else value
+
+        return plain(dataclasses.asdict(self))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
+        """Inverse of :meth:`to_dict`."""
+        nested = {"augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig}
+        values = dict(data)
+        for key, kind in nested.items():
+            if key in values:
+                values[key] = kind(**{k: tuple(v) if isinstance(v, list) else v for k, v in values[key].items()})
+        return cls(**values)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Data
+
+
+class CrossSamples(Dataset):
+    """Samples of two (motion, character, view) triples and the windows of their 8 combinations.
+
+    Sample ``index`` of epoch ``epoch`` is a pure function of (seed, epoch, index), so training resumes
+    exactly and data-loader workers need no shared state. The two motions always differ; characters
+    (views) differ when the network has a skeleton (view) encoder, and are shared otherwise. Every
+    window of one view is seen through the same camera (the world's ``rng`` draws the camera pitch).
+
+    Args:
+        split: a world split.
+        length: frames per window.
+        variant: network variant.
+        size: samples per epoch.
+        seed: seed.
+    """
+
+    def __init__(self, split: WorldSplit, length: int, variant: str, size: int, seed: int) -> None:
+        if split.num_motions < 2:
+            raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
+        config = variant_config(variant)
+        self.split = split
+        self.length = length
+        self.size = size
+        self.seed = seed
+        self.epoch = 0
+        self.vary_character = config.body_channels is not None and split.num_characters > 1
+        self.vary_view = config.view_channels is not None and split.num_views > 1
+
+    def __len__(self) -> int:
+        return self.size
+
+    def sample(self, epoch: int, index: int) -> dict[str, np.ndarray]:
+        """{"windows": [8, length, 15, 2] float32 (order of :data:`COMBOS`), "ids": [2, 3] int64}."""
+        rng = np.random.default_rng([self.seed, epoch, index])
+        motions = rng.choice(self.split.num_motions, 2, replace=False)
+        chars = _pair(rng, self.split.num_characters, self.vary_character)
+        views = _pair(rng, self.split.num_views, self.vary_view)
+        # The world's `rng` perturbs the camera (pitch): a fresh generator per view slot gives every
+        # window seen from one view the same camera.
+        view_seeds = rng.integers(0, 2**63 - 1, size=2)
+        if views[0] == views[1]:
+            view_seeds[1] = view_seeds[0]
+        cache: dict[tuple[int, int, int], np.ndarray] = {}
+        windows = []
+        for m, c, v in COMBOS:
+            key = (int(motions[m]), int(chars[c]), int(views[v]))
+            if key not in cache:
+                camera = np.random.default_rng(int(view_seeds[v]))
+                cache[key] = np.asarray(self.split.window(*key, length=self.length, offset=0, rng=camera), np.float32)
+            windows.append(cache[key])
+        ids = np.stack([motions, chars, views], axis=1).astype(np.int64)  # [2, 3]
+        return {"windows": np.stack(windows), "ids": ids}
+
+    def __getitem__(self, index: int) -> dict[str, np.ndarray]:
+        return self.sample(self.epoch, index)
+
+
+def _pair(rng: np.random.Generator, n: int, distinct: bool) -> np.ndarray:
+    if distinct:
+        return rng.choice(n, 2, replace=False)
+    return np.repeat(rng.integers(n), 2)
+
+
+def split_statistics(split: WorldSplit, length: int, count: int, seed: int) -> NormStats:
+    """Normalisation statistics of ``count`` random windows of a split."""
+    rng = np.random.default_rng([seed, 7919])
+    windows = [
+        split.window(
+            int(rng.integers(split.num_motions)), int(rng.integers(split.num_characters)),
+            int(rng.integers(split.num_views)), length=length, offset=0, rng=rng,
+        )
+        for _ in range(count)
+    ]
+    return row_statistics(np.stack(windows))
+
+
+def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: PreprocessConfig) -> np.ndarray:
+    """Overlapping windows (half-window steps) of real tracks in the canvas: [N, length, 15, 2] float32."""
+    out = []
+    for i, track in enumerate(tracks):
+        if len(track) < length:
+            log.warning("real track %d has %d frames (< %d); skipped", i, len(track), length)
+            continue
+        joints = prepare_track(track, preprocess, f"real track {i}")
+        out += [joints[s : s + length] for s in range(0, len(joints) - length + 1, max(1, length // 2))]
+    return np.asarray(out, dtype=np.float32).reshape(-1, length, 15, 2)
+
+
+def read_real_tracks(folder: str | Path) -> list[PoseTrack]:
+    """Every OpenPose folder in ``folder`` (or ``folder`` itself when it holds the JSON files)."""
+    from pose_io.readers import read_track
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: not a folder of OpenPose folders")
+    if any(folder.glob("*_keypoints.json")):
+        return [read_track(folder, fmt="openpose")]
+    subfolders = sorted(p for p in folder.iterdir() if p.is_dir() and any(p.glob("*_keypoints.json")))
+    if not subfolders:
+        raise InputError(f"{folder}: no OpenPose folders (*_keypoints.json) in it")
+    return [read_track(p, fmt="openpose") for p in subfolders]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# One step
+
+
+def batch_tensors(
+    windows: torch.Tensor, ids: torch.Tensor, stats: NormStats, config: TrainConfig, generator: torch.Generator,
+    augment: bool = True,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Network inputs and targets of a batch of samples.
+
+    Args:
+        windows: [B, 8, T, 15, 2] canvas pixels.
+        ids: [B, 2, 3] triple ids.
+        stats: normalisation statistics.
+        config: settings.
+        generator: random source.
+        augment: clip/scale/flip and corrupt (False for validation).
+
+    Returns:
+        (inputs, targets), each [B, 8, 30, T'].
+    """
+    if augment:
+        windows = augment_targets(windows, ids, config.augment, generator)
+    b, k, t = windows.shape[:3]
+    flat = windows.reshape(b * k, t, *windows.shape[3:])  # [B*8, T', 15, 2]
+    noisy = corrupt_inputs(flat, config.augment.noise_std, config.augment.drop_prob, generator) if augment else flat
+    targets = joints_to_channels(flat, stats).reshape(b, k, -1, t)  # [B, 8, 30, T']
+    inputs = joints_to_channels(noisy, stats).reshape(b, k, -1, t)
+    return inputs, targets
+
+
+def train_step(
+    model: RetargetNet, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor], stats: NormStats,
+    config: TrainConfig, generator: torch.Generator, real: torch.Tensor | None = None,
+) -> dict[str, float]:
+    """One optimisation step; returns the loss terms as floats.
+
+    Args:
+        model: the network (put in train mode).
+        optimizer: its optimizer.
+        batch: {"windows": [B, 8, T, 15, 2], "ids": [B, 2, 3]} on the model's device.
+        stats: normalisation statistics.
+        config: settings.
+        generator: random source of augmentation.
+        real: optional [R, T, 15, 2] real-track windows for the self-reconstruction term.
+    """
+    model.train()
+    inputs, targets = batch_tensors(batch["windows"], batch["ids"], stats, config, generator)
+    losses = objective(model, inputs, targets, stats, config.loss)
+    total = losses["total"]
+    if real is not None and len(real):
+        length = inputs.shape[-1]
+        clipped = real[:, :length] if real.shape[1] == length else _clip_real(real, length, generator)
+        noisy = corrupt_inputs(clipped, config.augment.noise_std, config.augment.drop_prob, generator)
+        real_losses = self_reconstruction(
+            model, joints_to_channels(noisy, stats), joints_to_channels(clipped, stats), stats, config.loss
+        )
+        losses["real"] = config.real_weight * real_losses["total"]
+        total = total + losses["real"]
+        losses["total"] = total
+    optimizer.zero_grad(set_to_none=True)
+    total.backward()
+    optimizer.step()
+    return {k: float(v.detach()) for k, v in losses.items()}
+
+
+def _clip_real(real: torch.Tensor, length: int, generator: torch.Generator) -> torch.Tensor:
+    offset = int(torch.randint(real.shape[1] - length + 1, (1,), generator=generator))
+    return real[:, offset : offset + length]
+
+
+@torch.no_grad()
+def evaluate(
+    model: RetargetNet, windows: torch.Tensor, ids: torch.Tensor, stats: NormStats, config: TrainConfig,
+    batch_size: int = 64,
+) -> dict[str, float]:
+    """Mean loss terms over fixed validation samples (eval mode, no augmentation)."""
+    model.eval()
+    device = next(model.parameters()).device
+    sums: dict[str, float] = {}
+    for start in range(0, len(windows), batch_size):
+        w, i = windows[start : start + batch_size].to(device), ids[start : start + batch_size].to(device)
+        inputs, targets = batch_tensors(w, i, stats, config, torch.Generator(), augment=False)
+        for k, v in objective(model, inputs, targets, stats, config.loss).items():
+            sums[k] = sums.get(k, 0.0) + float(v) * len(w)
+    return {k: v / len(windows) for k, v in sums.items()}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The loop
+
+
+@dataclass(frozen=True)
+class TrainSummary:
+    """What a training run did.
+
+    Attributes:
+        checkpoint: the checkpoint file.
+        epochs: completed epochs (in total, over all resumed runs).
+        steps: optimisation steps (in total).
+        stopped: "epochs" (all done) or "time" (budget used up).
+        history: one dict per completed epoch (train and validation loss means, seconds).
+    """
+
+    checkpoint: Path
+    epochs: int
+    steps: int
+    stopped: str
+    history: list[dict[str, float]]
+
+
+def fit(
+    train_split: WorldSplit,
+    val_split: WorldSplit | None,
+    out: str | Path,
+    config: TrainConfig = TrainConfig(),
+    device: str | torch.device = "cpu",
+    real_tracks: Sequence[PoseTrack] = (),
+    epochs: int | None = None,
+    minutes: float | None = None,
+    resume: bool = False,
+    num_workers: int = 0,
+    progress: bool = False,
+) -> TrainSummary:
+    """Train (or continue training) a retargeting network and write its checkpoint.
+
+    Args:
+        train_split: training split of the motion world.
+        val_split: validation split (None: no validation).
+        out: checkpoint file; must not exist unless ``resume``.
+        config: training settings.
+        device: torch device or its name ("auto", "cpu", "cuda[:N]").
+        real_tracks: unlabelled real tracks (self-reconstruction only).
+        epochs: total epochs to reach; None = until ``minutes`` run out, or 300 when both are None.
+        minutes: wall-clock budget of this call.
+        resume: continue the run stored in ``out``.
+        num_workers: data-loader worker processes.
+        progress: show a rich progress bar.
+
+    Returns:
+        A :class:`TrainSummary`.
+
+    Raises:
+        InputError: ``out`` exists without ``resume``, or holds a run with other settings.
+    """
+    out = Path(out)
+    dev = resolve_device(device) if isinstance(device, str) else device
+    target_epochs = epochs if epochs is not None else (DEFAULT_EPOCHS if minutes is None else math.inf)
+    deadline = time.monotonic() + 60.0 * minutes if minutes is not None else math.inf
+    started = time.monotonic()
+
+    if resume:
+        state = _resume_state(out, config)
+        model, stats, training = state["model"], state["stats"], state["training"]
+    else:
+        _require_new(out)
+        torch.manual_seed(config.seed)
+        model = RetargetNet(variant_config(config.variant))
+        stats = split_statistics(train_split, config.window, config.stats_windows, config.seed)
+        training = None
+    model.to(dev)
+    optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=config.amsgrad)
+    scheduler = torch.optim.lr_scheduler.ExponentialLR(optimizer, config.lr_decay)
+    generator = torch.Generator().manual_seed(config.seed)
+    real_rng = np.random.default_rng([config.seed, 104729])
+    if training is not None:
+        optimizer.load_state_dict(training["optimizer"])
+        scheduler.load_state_dict(training["scheduler"])
+        torch.set_rng_state(training["torch_rng"])
+        generator.set_state(training["augment_rng"])
+        real_rng.bit_generator.state = training["real_rng"]
+    done = training or {}
+    epoch: int = done.get("epoch", 0)
+    step_in_epoch: int = done.get("step", 0)
+    global_step: int = done.get("global_step", 0)
+    elapsed_before: float = done.get("elapsed_s", 0.0)
+    history: list[dict[str, float]] = list(done.get("history", []))
+
+    size = config.samples_per_epoch
+    dataset = CrossSamples(train_split, config.window, config.variant, size, config.seed)
+    steps_per_epoch = max(1, size // config.batch_size)
+    val = _validation_set(val_split, config) if val_split is not None else None
+    real = torch.from_numpy(real_windows(real_tracks, config.window, config.preprocess)) if real_tracks else None
+
+    def save() -> None:
+        save_checkpoint(out, model, stats, config.preprocess, training={
+            "config": config.to_dict(), "epoch": epoch, "step": step_in_epoch, "global_step": global_step,
+            "optimizer": optimizer.state_dict(), "scheduler": scheduler.state_dict(),
+            "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
+            "real_rng": real_rng.bit_generator.state,
+            "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
+        })
+
+    stopped = "epochs"
+    with _progress_bar(progress) as bar:
+        while epoch < target_epochs:
+            dataset.epoch = epoch
+            task = bar.add_task(f"epoch {epoch + 1}", total=steps_per_epoch, completed=step_in_epoch, losses="")
+            sums: dict[str, float] = {}
+            counted = 0
+            loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers)
+            out_of_time = False
+            for batch in loader:
+                batch = {k: v.to(dev) for k, v in batch.items()}
+                real_batch = None
+                if real is not None and len(real):
+                    pick = real_rng.choice(len(real), min(config.real_batch_size, len(real)), replace=False)
+                    real_batch = real[torch.from_numpy(pick)].to(dev)
+                losses = train_step(model, optimizer, batch, stats, config, generator, real_batch)
+                for k, v in losses.items():
+                    sums[k] = sums.get(k, 0.0) + v
+                counted += 1
+                step_in_epoch += 1
+                global_step += 1
+                bar.update(task, advance=1, losses=_format(losses))
+                if time.monotonic() > deadline and step_in_epoch < steps_per_epoch:
+                    out_of_time = True
+                    break
+            if out_of_time:
+                save()
+                stopped = "time"
+                log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
+                break
+            epoch += 1
+            step_in_epoch = 0
+            scheduler.step()
+            record = {"epoch": float(epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
+            if val is not None:
+                record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config).items()})
+            record["seconds"] = elapsed_before + time.monotonic() - started
+            history.append(record)
+            save()
+            bar.update(task, description=f"epoch {epoch} done", losses=_format(record, prefix="val_"))
+            log.info("epoch %d: %s", epoch, _format(record))
+            if time.monotonic() > deadline:
+                stopped = "time" if epoch < target_epochs else "epochs"
+                break
+    return TrainSummary(out, epoch, global_step, stopped, history)
+
+
+def _require_new(out: Path) -> None:
+    if out.exists():
+        raise InputError(f"{out}: already exists; pass --resume to continue that run, or choose another --out")
+
+
+def _resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
+    if not out.exists():
+        raise InputError(f"{out}: nothing to resume (no such checkpoint)")
+    loaded = load_checkpoint(out)
+    if loaded.training is None:
+        raise InputError(f"{out}: holds no training state to resume (only weights)")
+    stored = loaded.training["config"]
+    mine = config.to_dict()
+    changed = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
+    if changed:
+        raise InputError(f"{out}: was trained with other settings ({', '.join(changed)}); resume with the same ones")
+    return {"model": loaded.model, "stats": loaded.stats, "training": loaded.training}
+
+
+def _validation_set(split: WorldSplit, config: TrainConfig) -> tuple[torch.Tensor, torch.Tensor] | None:
+    if split.num_motions < 2:
+        log.warning("validation split has fewer than 2 motions; no validation")
+        return None
+    samples = CrossSamples(split, config.window, config.variant, config.val_samples, config.seed + 1)
+    items = [samples.sample(0, i) for i in range(config.val_samples)]
+    windows = torch.from_numpy(np.stack([it["windows"] for it in items]))  # [N, 8, T, 15, 2]
+    ids = torch.from_numpy(np.stack([it["ids"] for it in items]))  # [N, 2, 3]
+    return windows, ids
+
+
+def _loader(dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int) -> Iterator:
+    indices = range(first_step * batch_size, steps * batch_size)
+    return iter(DataLoader(dataset, batch_size=batch_size, sampler=indices, num_workers=workers, drop_last=True))
+
+
+def _format(losses: dict[str, float], prefix: str = "") -> str:
+    keys = [k for k in losses if k.startswith(prefix) and k not in ("epoch", "seconds")]
+    return " ".join(f"{k}={losses[k]:.4f}" for k in keys)
+
+
+class _NoBar:
+    def add_task(self, *args: Any, **kwargs: Any) -> int:
+        return 0
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        return None
+
+    def __enter__(self) -> "_NoBar":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def _progress_bar(enabled: bool) -> Any:
+    if not enabled:
+        return _NoBar()
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(
+        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+        TextColumn("{task.fields[losses]}"), console=Console(stderr=True), transient=False,
+    )
+
+
+def train(
+    mocap_dir: str | Path,
+    out: str | Path,
+    *,
+    cache_dir: str | Path | None = None,
+    real_dir: str | Path | None = None,
+    config: TrainConfig = TrainConfig(),
+    device: str = "auto",
+    epochs: int | None = None,
+    minutes: float | None = None,
+    resume: bool = False,
+    progress: bool = True,
+) -> TrainSummary:
+    """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
+
+    Args:
+        mocap_dir: motion-capture folder the world is built from.
+        out: checkpoint file.
+        cache_dir: where the world is cached; default ``<out>.world-cache`` next to the checkpoint.
+        real_dir: optional folder of OpenPose folders (unlabelled real tracks).
+        config: training settings.
+        device: "auto", "cpu", "cuda" or "cuda:N".
+        epochs: total epochs (see :func:`fit`).
+        minutes: time budget of this call.
+        resume: continue the run in ``out``.
+        progress: show a progress bar.
+    """
+    from retarget.world import MotionWorld
+
+    out = Path(out)
+    if resume and not out.exists():
+        raise InputError(f"{out}: nothing to resume (no such checkpoint)")
+    if not resume:
+        _require_new(out)
+    try:
+        dev = resolve_device(device)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    real = read_real_tracks(real_dir) if real_dir is not None else []
+    cache = Path(cache_dir) if cache_dir is not None else out.with_name(out.name + ".world-cache")
+    world = MotionWorld.build(mocap_dir, cache, seed=config.seed)
+    return fit(
+        world.split("train"), world.split("val"), out, config, dev, real, epochs, minutes, resume,
+        progress=progress,
+    )
