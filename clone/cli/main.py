@@ -36,6 +36,8 @@ def _root(
 
 
 # Verb groups register below, one line each, as they land.
+from clone.cli.pose import pose_app  # noqa: E402
+app.add_typer(pose_app, name="pose")
 from clone.cli.world import world_app  # noqa: E402
 app.add_typer(world_app, name="world")
 from clone.cli.synth import synth_app  # noqa: E402

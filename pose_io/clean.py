@@ -1,0 +1,186 @@
+"""Opt-in cleaning of pose tracks: filling short gaps, confidence-weighted smoothing, changing fps.
+
+Nothing here runs unless asked for; every function returns a new track and leaves missing data
+explicit where it cannot honestly be made up.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Gap:
+    """A run of frames ``start:stop`` in which joint ``joint`` is missing.
+
+    ``reason`` is ``"filled"``, ``"too long"`` (longer than ``max_gap``) or ``"edge"`` (touches the start
+    or end of the track, so there is nothing to interpolate towards).
+    """
+
+    joint: str
+    start: int
+    stop: int
+    reason: str
+
+    @property
+    def length(self) -> int:
+        return self.stop - self.start
+
+
+@dataclass(frozen=True)
+class GapReport:
+    """What :func:`fill_gaps` did: the gaps it filled and the ones left missing."""
+
+    filled: tuple[Gap, ...]
+    unfilled: tuple[Gap, ...]
+
+    @property
+    def frames_filled(self) -> int:
+        return sum(g.length for g in self.filled)
+
+    def summary(self) -> str:
+        """One line for people: counts, then the unfilled gaps as ``joint frames a-b``."""
+        text = f"filled {len(self.filled)} gaps ({self.frames_filled} joint-frames)"
+        if self.unfilled:
+            shown = ", ".join(f"{g.joint} frames {g.start}-{g.stop - 1} ({g.reason})" for g in self.unfilled[:8])
+            more = f", and {len(self.unfilled) - 8} more" if len(self.unfilled) > 8 else ""
+            text += f"; left missing: {shown}{more}"
+        return text
+
+
+def _missing_runs(missing: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each run of True in a [T] bool array."""
+    padded = np.concatenate([[False], missing, [False]]).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
+def fill_gaps(track: PoseTrack, max_gap: int) -> tuple[PoseTrack, GapReport]:
+    """Fill gaps of at most ``max_gap`` frames per joint by linear interpolation.
+
+    Coordinates and confidence are interpolated between the last frame before and the first frame
+    after the gap. Longer gaps, and gaps at the start or end of the track, stay missing and are
+    reported.
+
+    Args:
+        track: the track.
+        max_gap: longest run of missing frames to fill (0 fills nothing).
+
+    Returns:
+        The new track and a :class:`GapReport`.
+    """
+    if max_gap < 0:
+        raise InputError(f"max_gap must be >= 0, got {max_gap}")
+    joints = track.joints.copy()  # [T, J, 2]
+    conf = track.confidence.copy()  # [T, J]
+    t_len = track.num_frames
+    names = track.joint_layout.joints
+    filled: list[Gap] = []
+    unfilled: list[Gap] = []
+    for j, name in enumerate(names):
+        for start, stop in _missing_runs(track.missing[:, j]):
+            if start == 0 or stop == t_len:
+                unfilled.append(Gap(name, start, stop, "edge"))
+                continue
+            if stop - start > max_gap:
+                unfilled.append(Gap(name, start, stop, "too long"))
+                continue
+            a, b = start - 1, stop
+            w = ((np.arange(start, stop) - a) / (b - a))[:, None]  # [G, 1]
+            joints[start:stop, j] = (1 - w) * joints[a, j] + w * joints[b, j]
+            conf[start:stop, j] = (1 - w[:, 0]) * conf[a, j] + w[:, 0] * conf[b, j]
+            filled.append(Gap(name, start, stop, "filled"))
+    order = {n: i for i, n in enumerate(names)}
+    unfilled.sort(key=lambda g: (g.start, order[g.joint]))
+    report = GapReport(tuple(filled), tuple(unfilled))
+    if unfilled:
+        log.info("fill_gaps: %s", report.summary())
+    return track.replace(joints=joints, confidence=conf), report
+
+
+def gaussian_kernel(sigma: float) -> np.ndarray:
+    """[2r+1] Gaussian weights (not normalised), r = ceil(4 sigma)."""
+    radius = max(1, math.ceil(4.0 * sigma))
+    k = np.arange(-radius, radius + 1, dtype=np.float64)
+    return np.exp(-0.5 * (k / sigma) ** 2)
+
+
+def smooth(track: PoseTrack, sigma: float) -> PoseTrack:
+    """Temporal Gaussian smoothing weighted by confidence; missing joints stay missing.
+
+    Each visible joint becomes ``sum_k g(k) c[t+k] x[t+k] / sum_k g(k) c[t+k]`` over visible neighbours
+    (the kernel is cut at the track's ends and renormalised), so a low-confidence detection pulls its
+    neighbours little and a missing one not at all. Confidence is unchanged.
+
+    Args:
+        track: the track.
+        sigma: standard deviation in frames; 0 returns the track unchanged.
+
+    Returns:
+        The smoothed track.
+    """
+    if not (math.isfinite(sigma) and sigma >= 0):
+        raise InputError(f"smoothing sigma must be >= 0, got {sigma}")
+    if sigma == 0:
+        return track
+    kernel = gaussian_kernel(sigma)
+    radius = len(kernel) // 2
+    t_len = track.num_frames
+    weight = track.confidence.astype(np.float64)  # [T, J], 0 where missing
+    xy = np.nan_to_num(track.joints.astype(np.float64)) * weight[..., None]  # [T, J, 2]
+    num = np.zeros_like(xy)
+    den = np.zeros_like(weight)
+    for offset, g in zip(range(-radius, radius + 1), kernel):
+        # out[t] += g * in[t + offset] over the frames where t + offset exists.
+        lo, hi = max(0, -offset), min(t_len, t_len - offset)
+        if lo >= hi:
+            continue
+        num[lo:hi] += g * xy[lo + offset:hi + offset]
+        den[lo:hi] += g * weight[lo + offset:hi + offset]
+    missing = track.missing
+    out = np.where(missing[..., None], np.nan, num / np.where(den > 0, den, 1.0)[..., None])
+    return track.replace(joints=out.astype(np.float32))
+
+
+def resample(track: PoseTrack, fps: float) -> PoseTrack:
+    """The track at another frame rate, by linear interpolation in time.
+
+    Output frame ``i`` is at time ``i / fps``; frames cover the input's span, from its first frame to
+    its last (``floor((T - 1) * fps / track.fps) + 1`` frames). A joint is interpolated between the two
+    input frames around that time, and is missing when either of them lacks it (unless the time falls
+    on an input frame, which is then copied as it is).
+
+    Args:
+        track: the track.
+        fps: the new frame rate (> 0).
+
+    Returns:
+        The resampled track with ``fps`` set.
+    """
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"fps must be positive, got {fps}")
+    ratio = track.fps / fps
+    n_out = math.floor((track.num_frames - 1) / ratio + 1e-9) + 1
+    src = np.arange(n_out) * ratio  # [N] fractional input frame of each output frame
+    near = np.round(src)
+    src = np.where(np.abs(src - near) < 1e-6, near, src)
+    lo = np.clip(np.floor(src).astype(np.int64), 0, track.num_frames - 1)
+    hi = np.clip(lo + 1, 0, track.num_frames - 1)
+    w = (src - lo)[:, None]  # [N, 1]
+    exact = (w[:, 0] == 0)[:, None]
+    j_lo, j_hi = track.joints[lo].astype(np.float64), track.joints[hi].astype(np.float64)  # [N, J, 2]
+    c_lo, c_hi = track.confidence[lo].astype(np.float64), track.confidence[hi].astype(np.float64)  # [N, J]
+    joints = np.where(exact[..., None], j_lo, (1 - w[..., None]) * j_lo + w[..., None] * j_hi)
+    conf = np.where(exact, c_lo, (1 - w) * c_lo + w * c_hi)
+    # NaN in either neighbour propagates through the weighted sum, so a half-missing pair stays missing.
+    conf = np.where(np.isnan(joints[..., 0]), 0.0, conf)
+    return PoseTrack(joints.astype(np.float32), conf.astype(np.float32), fps, track.image_size, track.layout)

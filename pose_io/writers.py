@@ -1,0 +1,139 @@
+"""Writing pose tracks, atomically; every format here reads back identical with :func:`read_track`.
+
+Formats (``fmt``, detected from the path unless given):
+
+- ``openpose``: a folder (a path without suffix) of ``<stem>_000000000000_keypoints.json`` files, one
+  per frame, ``<stem>`` being the folder's name: ``{"version": 1.3, "people": [{"pose_keypoints_2d":
+  [x, y, c, ...]}]}``; a missing joint is ``0, 0, 0`` and a frame with no visible joint has no person.
+  Values are written with 9 significant digits, enough for float32 to come back bit for bit. OpenPose
+  files hold neither fps nor image size, so a sidecar ``clone2d_track.json`` (``kind``, ``fps``,
+  ``image_size``, ``layout``, ``frames``) goes into the folder; our reader honours it, other tools
+  ignore it. OpenPose never writes negative coordinates and our reader rejects them, so a track with
+  a visible joint left of or above the image cannot be written in this format (use ``.npz``).
+- ``npz``: ``joints`` [T, J, 2] float32 (NaN = missing), ``confidence`` [T, J] float32, ``fps``
+  float64, ``image_size`` int64 [2] (width, height), ``layout`` str.
+- ``csv``: ``# fps: ...``, ``# image_size: WxH``, ``# layout: ...`` lines, a header
+  ``frame,<joint>_x,<joint>_y,<joint>_c,...`` and one row per frame; missing joints have empty x/y
+  cells and confidence 0.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from pose_io.atomic import atomic_dir, atomic_file
+from pose_io.errors import InputError
+from pose_io.readers import SIDECAR_KIND, SIDECAR_NAME
+from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
+
+
+def write_track(track: PoseTrack, path: str | os.PathLike, fmt: str | None = None, overwrite: bool = False) -> Path:
+    """Write ``track`` to ``path`` atomically (nothing appears unless the whole write succeeds).
+
+    Args:
+        track: the pose track.
+        path: output file (``.npz``, ``.csv``) or folder (OpenPose).
+        fmt: one of :data:`WRITERS`; detected from ``path`` when None.
+        overwrite: replace an existing ``path``; otherwise an existing path is an InputError.
+
+    Returns:
+        ``path``.
+    """
+    path = Path(path)
+    fmt = output_format(path) if fmt is None else fmt
+    try:
+        writer = WRITERS[fmt]
+    except KeyError:
+        raise InputError(f"unknown output pose format {fmt!r}; valid: {', '.join(sorted(WRITERS))}") from None
+    writer(track, path, overwrite)
+    log.info("wrote %s (%d frames, %s)", path, track.num_frames, fmt)
+    return path
+
+
+def output_format(path: Path) -> str:
+    """``.npz`` / ``.csv`` by suffix; a path without suffix (or an existing folder) is an OpenPose folder."""
+    suffix = path.suffix.lower()
+    if suffix in (".npz", ".csv"):
+        return suffix[1:]
+    if path.is_dir() or not suffix:
+        return "openpose"
+    raise InputError(f"{path}: cannot write pose files of type {suffix}; use a folder (OpenPose JSON), .npz or .csv")
+
+
+def _number(v: float) -> str:
+    # 9 significant digits bring any float32 back exactly.
+    return format(float(v), ".9g")
+
+
+def _write_openpose(track: PoseTrack, path: Path, overwrite: bool) -> None:
+    visible = ~track.missing
+    negative = visible & (track.joints < 0).any(axis=-1)
+    if negative.any():
+        t, j = (int(v) for v in np.argwhere(negative)[0])
+        name = track.joint_layout.joints[j]
+        raise InputError(
+            f"{path}: OpenPose JSON cannot hold negative coordinates ({name} at frame {t}); write .npz instead"
+        )
+    xyc = np.concatenate([np.nan_to_num(track.joints), track.confidence[..., None]], axis=-1)  # [T, J, 3]
+    stem = path.name
+    with atomic_dir(path, overwrite=overwrite) as tmp:
+        for t in range(track.num_frames):
+            if visible[t].any():
+                values = ",".join(_number(v) for v in xyc[t].ravel())
+                people = f'[{{"pose_keypoints_2d":[{values}]}}]'
+            else:
+                people = "[]"
+            (tmp / f"{stem}_{t:012d}_keypoints.json").write_text(f'{{"version":1.3,"people":{people}}}\n')
+        sidecar = {
+            "kind": SIDECAR_KIND, "fps": track.fps, "image_size": list(track.image_size),
+            "layout": track.layout, "frames": track.num_frames,
+        }
+        (tmp / SIDECAR_NAME).write_text(json.dumps(sidecar, indent=1) + "\n")
+
+
+def _write_npz(track: PoseTrack, path: Path, overwrite: bool) -> None:
+    with atomic_file(path, overwrite=overwrite) as tmp, open(tmp, "wb") as f:
+        np.savez_compressed(
+            f,
+            joints=track.joints,
+            confidence=track.confidence,
+            fps=np.float64(track.fps),
+            image_size=np.array(track.image_size, dtype=np.int64),
+            layout=np.array(track.layout),
+        )
+
+
+def _write_csv(track: PoseTrack, path: Path, overwrite: bool) -> None:
+    joints = track.joint_layout.joints
+    lines = [
+        f"# fps: {track.fps!r}",
+        f"# image_size: {track.image_size[0]}x{track.image_size[1]}",
+        f"# layout: {track.layout}",
+        ",".join(["frame"] + [f"{n}_{a}" for n in joints for a in ("x", "y", "c")]),
+    ]
+    for t in range(track.num_frames):
+        cells = [str(t)]
+        for j in range(len(joints)):
+            if track.missing[t, j]:
+                cells += ["", "", "0"]
+            else:
+                cells += [_number(track.joints[t, j, 0]), _number(track.joints[t, j, 1]),
+                          _number(track.confidence[t, j])]
+        lines.append(",".join(cells))
+    with atomic_file(path, overwrite=overwrite) as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+
+
+WRITERS: dict[str, Callable[[PoseTrack, Path, bool], None]] = {
+    "openpose": _write_openpose,
+    "npz": _write_npz,
+    "csv": _write_csv,
+}
