@@ -25,6 +25,7 @@ The measures:
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
@@ -34,6 +35,8 @@ import numpy as np
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout, get_layout
 from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
 
 FEET = ("l_ankle", "r_ankle")
 PCK_ALPHAS = (0.05, 0.1)
@@ -167,16 +170,17 @@ def limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np
 def reference_limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
     """[L] the reference's length of every limb: the median over the frames of [T, J, 2] joints.
 
-    Raises:
-        InputError: a limb is missing in every frame.
+    A limb missing in every frame gets NaN (and is then left out of the limb error), with a warning.
     """
     layout = _layout(layout)
     lengths = limb_lengths(joints, layout)
     seen = ~np.isnan(lengths).all(axis=0)
     if not seen.all():
         names = [f"{a}-{b}" for (a, b), ok in zip(layout.limbs, seen) if not ok]
-        raise InputError(f"reference track: limbs never seen: {', '.join(names)}")
-    return np.nanmedian(lengths, axis=0)
+        log.warning("reference track: limbs never seen, left out of the limb error: %s", ", ".join(names))
+    out = np.full(lengths.shape[1], np.nan)
+    out[seen] = np.nanmedian(lengths[:, seen], axis=0)
+    return out
 
 
 def skeleton_height(joints: np.ndarray, layout: JointLayout | str = "body15") -> float:

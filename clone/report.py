@@ -24,19 +24,31 @@ import logging
 import math
 import os
 import shutil
-from collections.abc import Iterator, Mapping, Sequence
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
-from clone.metrics import METRICS, Scores
+from clone.metrics import (
+    METRICS,
+    FrameScorer,
+    Scores,
+    evaluate_track,
+    reference_limb_lengths,
+    skeleton_height,
+)
 from pose_io.atomic import atomic_dir
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
 from pose_io.track import PoseTrack
+
+if TYPE_CHECKING:
+    from pose_io.video import Frames
 
 log = logging.getLogger(__name__)
 
@@ -179,7 +191,7 @@ def pose_panel(joints: np.ndarray, layout: str, image_size: tuple[int, int], hei
 
 def overlay(frame: np.ndarray, joints: np.ndarray | None, layout: str) -> np.ndarray:
     """A copy of ``frame`` ([H, W, 3] uint8 RGB) with the [J, 2] pose drawn thinly over it (None: no pose)."""
-    out = np.array(frame, dtype=np.uint8, copy=True)
+    out = np.array(frame, dtype=np.uint8, order="C", copy=True)  # generator frames may be strided views
     if joints is not None:
         draw_pose(out, joints, get_layout(layout), thickness=max(1, round(min(out.shape[:2]) / 256)))
     return out
@@ -645,3 +657,214 @@ def write_report(
         write_report_files(stage, methods, driver, gt, VIDEO if video is not None else None)
     log.info("report written to %s", out_dir)
     return out_dir / PAGE
+
+
+# --------------------------------------------------------------------------------------------- the run
+
+# The methods a report compares, in column order: drive method -> (column label, one-line description).
+REPORT_METHODS: dict[str, tuple[str, str]] = {
+    "global-scale": (
+        "Global scaling",
+        (
+            "Everybody Dance Now's global normalisation: the driver scaled and moved per frame from its feet "
+            "range onto the reference's, so it keeps the driver's own proportions."
+        ),
+    ),
+    "retarget": (
+        "Retargeted",
+        (
+            "the retargeting network (Aberman et al. 2019): the driver's motion code decoded with the "
+            "reference's skeleton and view codes."
+        ),
+    ),
+}
+
+
+@dataclass(frozen=True)
+class ReportRun:
+    """What `clone report` wrote.
+
+    Attributes:
+        page: the report page.
+        frames: frames compared.
+        summary: method -> its summary numbers.
+        seconds: wall time of the run.
+    """
+
+    page: Path
+    frames: int
+    summary: dict[str, dict[str, float]]
+    seconds: float
+
+
+def read_gt_poses(path: str | os.PathLike, num_frames: int, image_size: tuple[int, int]) -> PoseTrack:
+    """Ground-truth poses as body15, checked against the driver's length and the reference's frame size.
+
+    Args:
+        path: any pose file or folder ``pose_io`` reads.
+        num_frames: the driver's frame count.
+        image_size: (width, height) of the reference's frames; used when the file stores no size.
+
+    Raises:
+        InputError: a different number of frames, or a stored size that differs from ``image_size``.
+    """
+    from pose_io.readers import read_track_summary
+
+    summary = read_track_summary(path, fallback_size=image_size)
+    track = summary.track
+    if len(track) != num_frames:
+        raise InputError(f"{path}: ground-truth poses have {len(track)} frames, the driver has {num_frames}")
+    if track.image_size != tuple(image_size):
+        if summary.size_source in ("file", "given"):
+            raise InputError(
+                f"{path}: ground-truth poses are for {track.image_size[0]}x{track.image_size[1]} frames, "
+                f"the reference model's frames are {image_size[0]}x{image_size[1]}"
+            )
+        track = track.replace(image_size=image_size)  # the file stores no size: the reference's is meant
+    return track.to_layout("body15")
+
+
+def open_gt_frames(path: str | os.PathLike, num_frames: int, image_size: tuple[int, int]) -> Frames:
+    """Ground-truth frames (video or image folder), checked against the driver's length and the reference's size.
+
+    Returns:
+        A re-iterable ``pose_io.video.Frames``.
+
+    Raises:
+        InputError: unreadable, a different number of frames, or a frame size other than ``image_size``.
+    """
+    from pose_io.video import read_frames
+
+    frames = read_frames(path)
+    if tuple(frames.size) != tuple(image_size):
+        raise InputError(
+            f"{path}: ground-truth frames are {frames.size[0]}x{frames.size[1]}, the reference model's frames "
+            f"are {image_size[0]}x{image_size[1]}"
+        )
+    if frames.num_frames != num_frames:
+        raise InputError(
+            f"{path}: {frames.num_frames} ground-truth frames, the driver has {num_frames} frames"
+        )
+    return frames
+
+
+def make_report(
+    driver_path: str | os.PathLike,
+    out_dir: str | os.PathLike,
+    *,
+    model_path: str | os.PathLike,
+    gt_poses: str | os.PathLike | None = None,
+    gt_frames: str | os.PathLike | None = None,
+    overwrite: bool = False,
+    device: str = "cpu",
+    weights: str | os.PathLike | None = None,
+    max_gap: int = 5,
+    progress: Callable[[int, int], None] | None = None,
+) -> ReportRun:
+    """Drive the reference model with both methods, measure them and write the report folder.
+
+    Every frame is generated once and used three ways (video, frame scores, stills), so memory does not
+    grow with the driver's length.
+
+    Args:
+        driver_path: the driver's poses (any format ``pose_io`` reads).
+        out_dir: the report folder (see ``write_report`` for the overwrite rules).
+        model_path: the reference model from ``clone train-ref``.
+        gt_poses: poses of the reference really performing the driver's motion, frame for frame.
+        gt_frames: frames (video or image folder) of the same, the reference's frame size.
+        overwrite: replace an existing report folder.
+        device: where the networks run.
+        weights: retargeting weights (default: see ``clone.drive.retargeting_weights``).
+        max_gap: fill driver gaps of at most this many frames.
+        progress: called with (frames done, total) after every frame.
+
+    Returns:
+        Where the page is and the summary numbers.
+    """
+    from clone.canvas import cut_frame, image_to_canvas
+    from clone.drive import generate_frames, move_onto_reference, read_driver
+    from clone.reference_model import load_reference_model
+    from pose_io.video import VideoWriter
+
+    t0 = time.perf_counter()
+    out_dir = Path(out_dir)
+    check_report_dir(out_dir, overwrite)  # before any slow work
+    model = load_reference_model(model_path)
+    canvas = model.canvas
+    driver = read_driver(driver_path, max_gap)
+    total = driver.num_frames
+    truth = None if gt_poses is None else read_gt_poses(gt_poses, total, canvas.image_size)
+    truth_frames = None if gt_frames is None else open_gt_frames(gt_frames, total, canvas.image_size)
+
+    reference = model.reference_track
+    ref_lengths = reference_limb_lengths(reference.joints, reference.layout)
+    height = skeleton_height(reference.joints, reference.layout)
+    driven = {m: move_onto_reference(driver, model, m, weights, device) for m in REPORT_METHODS}
+    truth_canvas = None if truth is None else image_to_canvas(truth.joints, canvas)  # [T, J, 2] canvas px
+    scorers = {m: FrameScorer(truth_canvas) for m in driven} if truth_frames is not None else {}
+    at = set(still_indices(total))
+    stills: dict[str, dict[int, np.ndarray]] = {m: {} for m in driven}
+    gt_stills: dict[int, np.ndarray] = {}
+    panel_height = min(canvas.size, 512)
+    labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)] + (["Ground truth"] if truth_frames else [])
+
+    with report_dir(out_dir, overwrite) as stage:
+        streams = [generate_frames(model, track, device) for track in driven.values()]
+        gt_stream = iter(truth_frames) if truth_frames is not None else None
+        with VideoWriter(stage / VIDEO, fps=driver.fps) as video:
+            for t, outputs in enumerate(zip(*streams)):
+                frames = [frame for _pose_map, frame in outputs]  # [S, S, 3] uint8 each
+                panels = [
+                    pose_panel(driver.joints[t], driver.layout, driver.image_size, panel_height),
+                    *frames,
+                ]
+                if gt_stream is not None:
+                    full = next(gt_stream, None)
+                    if full is None:
+                        raise InputError(f"{gt_frames}: ran out of frames at frame {t} of {total}")
+                    true_frame = cut_frame(full, canvas)  # the generator's view of the true frame
+                    panels.append(true_frame)
+                    for m, frame in zip(driven, frames):
+                        scorers[m].add(frame, true_frame)
+                    if t in at:
+                        gt_stills[t] = true_frame
+                if t in at:
+                    for m, frame in zip(driven, frames):
+                        stills[m][t] = frame
+                video.write(side_by_side(panels, labels, panel_height))
+                if progress is not None:
+                    progress(t + 1, total)
+
+        methods: dict[str, MethodResult] = {}
+        for m, track in driven.items():
+            scores = evaluate_track(track, ref_lengths, height, truth)
+            if m in scorers:
+                scores = scores.merged(scorers[m].scores())
+            poses_canvas = image_to_canvas(track.joints[sorted(at)], canvas)  # [S, J, 2]
+            label, description = REPORT_METHODS[m]
+            methods[m] = MethodResult(
+                label, track, scores, stills[m], dict(zip(sorted(at), poses_canvas)), description
+            )
+        gt_info = None
+        if truth is not None or truth_frames is not None:
+            gt_poses_canvas = {} if truth_canvas is None else {t: truth_canvas[t] for t in gt_stills}
+            gt_info = GroundTruth(
+                None if gt_poses is None else str(gt_poses),
+                None if gt_frames is None else str(gt_frames),
+                gt_stills,
+                gt_poses_canvas,
+            )
+        info = DriverInfo(driver, str(driver_path), str(model_path), _driver_baseline(driver))
+        write_report_files(stage, methods, info, gt_info, VIDEO, still_height=min(canvas.size, 384))
+    summary = {m: dict(r.scores.summary) for m, r in methods.items()}
+    return ReportRun(out_dir / PAGE, total, summary, time.perf_counter() - t0)
+
+
+def _driver_baseline(driver: PoseTrack) -> Scores | None:
+    """The driver measured against its own proportions and height (None when it has no full skeleton)."""
+    try:
+        return evaluate_track(driver, reference_limb_lengths(driver.joints, driver.layout),
+                              skeleton_height(driver.joints, driver.layout))  # fmt: skip
+    except InputError as exc:
+        log.warning("no driver baseline: %s", exc)
+        return None

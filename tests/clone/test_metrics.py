@@ -190,3 +190,12 @@ def test_evaluate_track_uses_fps_window_and_gt_layout():
     assert metrics.contact_window(30.0) == 31 and metrics.contact_window(25.0) == 25
     with pytest.raises(InputError, match="frames"):
         metrics.evaluate_track(track, metrics.reference_limb_lengths(joints), HEIGHT, gt.frames(0, 10))
+
+
+def test_limb_never_seen_in_reference_is_left_out():
+    joints = stand(3)
+    joints[:, BODY15.index("l_wrist")] = np.nan
+    ref = metrics.reference_limb_lengths(joints)
+    assert np.isnan(ref[BODY15.limbs.index(("l_elbow", "l_wrist"))]) and np.isfinite(ref).sum() == 13
+    per_frame, _ = metrics.limb_error(stand(3), ref, HEIGHT)
+    np.testing.assert_allclose(per_frame, 0.0)

@@ -1,0 +1,73 @@
+"""`clone report`: drive the reference with global scaling and with retargeting, measure both, write a page.
+
+torch, OpenCV and matplotlib are imported inside the command so that `clone --help` stays fast.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from clone.cli.common import console, device_option, user_errors
+
+_HEADLINE = ("limb_error_pct", "foot_slide_pct", "jitter_pct", "pose_mse", "pck_0.1", "ssim", "psnr")
+
+
+@user_errors
+def report_command(
+    drive_poses: Path = typer.Argument(..., help="The driver's poses (any format `clone pose` reads)."),
+    out: Path = typer.Option(
+        ..., "--out", help="Report folder to write (report.html, video, plots, metrics.json)."
+    ),
+    model: Path = typer.Option(
+        Path("ref_model.pt"), "--model", help="Reference model from `clone train-ref`."
+    ),
+    gt_poses: Path | None = typer.Option(
+        None,
+        "--gt-poses",
+        help="Poses of the reference really performing the driver's motion, frame for frame.",
+    ),
+    gt_frames: Path | None = typer.Option(
+        None, "--gt-frames", help="Frames (video or image folder) of the same, at the reference's frame size."
+    ),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing report folder."),
+    device: str = device_option(),
+    weights: Path | None = typer.Option(
+        None,
+        "--weights",
+        help="Retargeting weights (default: the shipped ones, else those the model was made with).",
+    ),
+) -> None:
+    """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+    from rich.table import Table
+
+    from clone.metrics import METRICS
+    from clone.report import REPORT_METHODS, make_report
+    from pose_io.errors import InputError
+    from retarget.runtime import configure_threads, resolve_device
+
+    try:
+        dev = str(resolve_device(device))
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    configure_threads()
+    columns = (TextColumn("report"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=True) as bar:
+        task = bar.add_task("report", total=None)
+        run = make_report(
+            drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
+            device=dev, weights=weights, progress=lambda done, total: bar.update(task, completed=done, total=total),
+        )  # fmt: skip
+    table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")
+    table.add_column("measure")
+    for name in run.summary:
+        table.add_column(REPORT_METHODS[name][0], justify="right")
+    for key in _HEADLINE:
+        if all(key in s for s in run.summary.values()):
+            info = METRICS[key]
+            values = [f"{s[key] * info.scale:.4g}" for s in run.summary.values()]
+            table.add_row(f"{info.label} ({info.unit})" if info.unit else info.label, *values)
+    console.print(table)
+    typer.echo(f"wrote {run.page}")
