@@ -44,9 +44,9 @@ from clone.cli.synth import synth_app  # noqa: E402
 app.add_typer(synth_app, name="synth")
 from clone.cli import cloning  # noqa: E402
 app.command("train-ref")(cloning.train_ref); app.command("drive")(cloning.drive)  # noqa: E702
-
 from clone.cli.report import report_command  # noqa: E402
 app.command("report")(report_command)
+
 
 def main() -> None:
     app()
