@@ -16,7 +16,7 @@ belt, and stripes or checks laid out in texture coordinates along each limb's ax
 the pattern moves with the body. A V-neck on the front of the shirt tells front from back.
 
 Coordinates: ``xy`` in pixels (x right, y down, pixel centres at integers), ``depth`` in metres, larger
-is farther; ``px_per_m`` converts metres across the image to pixels (an orthographic camera). The
+is farther; ``px_per_m`` converts metres across the image to pixels (a weak-perspective camera). The
 per-frame work is a few dozen numpy operations per primitive on float32 buffers that are allocated
 once per video, which keeps it well above 20 frames/s at 256² on one core.
 """
@@ -51,12 +51,6 @@ from retarget.world.camera import (
 from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, retarget_3d
 
 logger = logging.getLogger(__name__)
-
-# Joints the body is built from (names of the motion world's joint set).
-BODY_JOINTS: tuple[str, ...] = (
-    "nose", "neck", "r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist", "mid_hip",
-    "r_hip", "r_knee", "r_ankle", "l_hip", "l_knee", "l_ankle", "l_big_toe", "r_big_toe", "head",
-)
 
 # Direction towards the light in camera coordinates (x right, y down, z away): above, left, in front.
 _LIGHT = np.array([-0.38, -0.72, -0.58], dtype=np.float64)
@@ -409,13 +403,13 @@ class PerformerRenderer:
     Args:
         look: the performer's appearance.
         background: [H, W, 3] uint8 (see :func:`make_background`).
-        joint_names: names of the joints in the arrays passed to :meth:`render`, in order; must
-            include ``BODY_JOINTS``.
+        joint_names: names of the joints in the arrays passed to :meth:`render`, in order; the body
+            is built from the motion world's joints, so every name of ``WORLD_JOINTS`` must be there.
     """
 
-    def __init__(self, look: Look, background: np.ndarray, joint_names: Sequence[str]) -> None:
+    def __init__(self, look: Look, background: np.ndarray, joint_names: Sequence[str] = WORLD_JOINTS) -> None:
         index = {n: i for i, n in enumerate(joint_names)}
-        lacking = [n for n in BODY_JOINTS if n not in index]
+        lacking = [n for n in WORLD_JOINTS if n not in index]
         if lacking:
             raise ValueError(f"renderer needs joints {', '.join(lacking)}; got {', '.join(joint_names)}")
         self.look = look

@@ -139,14 +139,14 @@ def test_projected_joints_lie_inside_the_silhouette(yaw: float, name: str) -> No
     image = ren.render(xy, depth, SCALE)
     mask = ren.silhouette()
     for k, joint in enumerate(WORLD_JOINTS):
-        x, y = (int(round(v)) for v in xy[k])
+        x, y = np.rint(xy[k]).astype(int)
         assert mask[y, x], f"{joint} at ({x}, {y}) is outside the body (yaw {yaw})"
         assert (image[y, x] != background[y, x]).any(), joint
 
 
 def test_torso_is_wide_from_the_front_and_narrow_from_the_side() -> None:
     ren, _ = renderer()
-    row = int(round(project(standing())[0][WORLD_JOINTS.index("neck"), 1] + 0.15 * SCALE))
+    row = int(np.rint(project(standing())[0][WORLD_JOINTS.index("neck"), 1] + 0.15 * SCALE))
     widths = []
     for yaw in (0.0, 90.0):
         pose = standing()
@@ -177,7 +177,7 @@ def test_the_head_shows_which_way_the_person_faces() -> None:
     for yaw in (0.0, 180.0):
         xy, depth = project(standing(), yaw)
         image = ren.render(xy, depth, SCALE).astype(int)
-        x, y = (int(round(v)) for v in xy[head])
+        x, y = np.rint(xy[head]).astype(int)
         patch = image[y - 2:y + 3, x - 2:x + 3].reshape(-1, 3)
         skin = np.abs(patch - np.array(look.skin)).sum(-1)
         hair = np.abs(patch - np.array(look.hair)).sum(-1)
