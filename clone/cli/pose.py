@@ -76,7 +76,8 @@ def info(
     size_note = {"given": "given", "file": "from the file", "fallback": "from the frames",
                  "inferred": "inferred from the data; set it with --size WxH"}
     counts = np.bincount(summary.people_counts)
-    people = ", ".join(f"{n} {'person' if n == 1 else 'people'}: {c} frames" for n, c in enumerate(counts) if c)
+    people = ", ".join(f"{n} {'person' if n == 1 else 'people'}: {c} frame{'' if c == 1 else 's'}"
+                       for n, c in enumerate(counts) if c)
     lines = [
         ("file", f"{poses} ({summary.format})"),
         ("frames", f"{track.num_frames} ({track.num_frames / track.fps:.2f} s)"),

@@ -45,7 +45,7 @@ def test_info_people_per_frame(tmp_path):
         (folder / f"m_{t:012d}_keypoints.json").write_text(json.dumps({"people": people}))
     result = invoke("pose", "info", folder)
     assert result.exit_code == 0, result.output
-    assert "0 people: 1 frames, 1 person: 1 frames, 2 people: 2 frames" in result.output
+    assert "0 people: 1 frame, 1 person: 1 frame, 2 people: 2 frames" in result.output
     assert "from frame 1" in result.output
 
 
