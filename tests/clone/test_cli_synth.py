@@ -145,3 +145,16 @@ def test_characters_lists_every_named_character() -> None:
     for name, skeleton in NAMED_CHARACTERS.items():
         line = next(line for line in result.output.splitlines() if line.startswith(name + " "))
         assert f"height {skeleton.height:.2f} m" in line
+
+
+def test_render_twice_gives_identical_files(bvh: Path, tmp_path: Path) -> None:
+    outs = [tmp_path / "a", tmp_path / "b"]
+    for out in outs:
+        result = runner.invoke(app, ["synth", "render", str(bvh), "--character", "child", "--yaw", "-60",
+                                     "--size", "40", "--out", str(out)])
+        assert result.exit_code == 0, result.output
+    files = sorted(p.relative_to(outs[0]) for p in outs[0].rglob("*") if p.is_file())
+    assert len(files) > 20
+    assert files == sorted(p.relative_to(outs[1]) for p in outs[1].rglob("*") if p.is_file())
+    for rel in files:  # frames, poses and meta alike
+        assert (outs[0] / rel).read_bytes() == (outs[1] / rel).read_bytes(), rel
