@@ -23,9 +23,9 @@ from __future__ import annotations
 import gzip
 import math
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
 
 import numpy as np
 
@@ -142,8 +142,34 @@ def forward_kinematics(
     return rot, pos
 
 
+class _JointTree:
+    """What both clip types share: name lookup, frame rate and positions from ``global_transforms``."""
+
+    names: tuple[str, ...]
+    frame_time: float
+    source: str
+
+    @property
+    def fps(self) -> float:
+        return 1.0 / self.frame_time
+
+    def index(self, name: str) -> int:
+        """Index of joint ``name``; KeyError names the file."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise KeyError(f"{self.source or 'clip'}: no joint {name!r}") from None
+
+    def global_transforms(self, joints: Iterable[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def global_positions(self, joints: Iterable[int] | None = None) -> np.ndarray:
+        """[T, N, 3] world positions of every joint and End Site (file units and axes)."""
+        return self.global_transforms(joints)[1]
+
+
 @dataclass(frozen=True, eq=False)
-class BvhClip:
+class BvhClip(_JointTree):
     """A parsed BVH file.
 
     Attributes:
@@ -174,20 +200,9 @@ class BvhClip:
         return int(self.motion.shape[0])
 
     @property
-    def fps(self) -> float:
-        return 1.0 / self.frame_time
-
-    @property
     def end_sites(self) -> np.ndarray:
         """[N] bool, True for End Sites."""
         return np.array([name.endswith("_End") and not ch for name, ch in zip(self.names, self.channels)])
-
-    def index(self, name: str) -> int:
-        """Index of joint ``name``; KeyError names the file."""
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise KeyError(f"{self.source or 'BVH'}: no joint {name!r}") from None
 
     def local_transforms(self, joints: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Local rotation and translation of each joint per frame.
@@ -237,9 +252,6 @@ class BvhClip:
         local_r, local_t = self.local_transforms(idx)
         return forward_kinematics(self.parents, local_r, local_t, idx)
 
-    def global_positions(self, joints: Iterable[int] | None = None) -> np.ndarray:
-        """[T, N, 3] world positions of every joint and End Site (file units and axes)."""
-        return self.global_transforms(joints)[1]
 
 
 class _Tokens:
@@ -263,6 +275,19 @@ class _Tokens:
         tok = self.items[self.pos][0]
         self.pos += 1
         return tok
+
+    def name(self) -> str:
+        """The rest of the current line, braces excluded: joint names may hold spaces ("Bip01 L Thigh")."""
+        if self.pos >= len(self.items):
+            raise self.fail("file ends inside the hierarchy")
+        line = self.items[self.pos][1]
+        parts = []
+        while self.pos < len(self.items) and self.items[self.pos][1] == line and self.items[self.pos][0] not in "{}":
+            parts.append(self.items[self.pos][0])
+            self.pos += 1
+        if not parts:
+            raise self.fail("joint without a name")
+        return " ".join(parts)
 
     def peek(self) -> str | None:
         return self.items[self.pos][0] if self.pos < len(self.items) else None
@@ -315,7 +340,7 @@ def _parse_hierarchy(text: str, path: str) -> tuple[list[str], list[int], list[l
                         raise toks.fail(f"unknown channel {c!r}")
                 channels[me] = chans
             elif key == "JOINT" and not end_site:
-                joint(me, toks.next(), False)
+                joint(me, toks.name(), False)
             elif key == "END" and not end_site:
                 toks.expect("Site")
                 joint(me, f"{name}_End", True)
@@ -324,7 +349,7 @@ def _parse_hierarchy(text: str, path: str) -> tuple[list[str], list[int], list[l
 
     while toks.peek() is not None and toks.peek().upper() == "ROOT":
         toks.next()
-        joint(-1, toks.next(), False)
+        joint(-1, toks.name(), False)
     if not names:
         raise toks.fail("no ROOT joint")
     if toks.peek() is not None:
@@ -398,7 +423,7 @@ def parse_bvh(text: str, source: str = "<string>") -> BvhClip:
         cols = [starts[j] + c for c, name in enumerate(chans) if name.lower().endswith("position")]
         if not cols:
             continue
-        axes = [_AXES[chans[c][0].upper()] for c, name in enumerate(chans) if name.lower().endswith("position")]
+        axes = [_AXES[name[0].upper()] for c, name in enumerate(chans) if name.lower().endswith("position")]
         mean = np.zeros(3)
         mean[axes] = motion[:, cols].mean(axis=0)
         norm = float(np.linalg.norm(offsets_a[j]))
@@ -444,7 +469,7 @@ def read_bvh(path: str | Path) -> BvhClip:
 
 
 @dataclass(frozen=True, eq=False)
-class AcclaimClip:
+class AcclaimClip(_JointTree):
     """An ASF skeleton driven by an AMC motion, as a joint tree like ``BvhClip``.
 
     Each ASF bone becomes a joint at the bone's start (so ``lfemur`` is the hip joint and ``ltibia`` the
@@ -475,16 +500,6 @@ class AcclaimClip:
     def num_frames(self) -> int:
         return int(self.root_positions.shape[0])
 
-    @property
-    def fps(self) -> float:
-        return 1.0 / self.frame_time
-
-    def index(self, name: str) -> int:
-        try:
-            return self.names.index(name)
-        except ValueError:
-            raise KeyError(f"{self.source or 'ASF'}: no bone {name!r}") from None
-
     def global_transforms(self, joints: Iterable[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Forward kinematics: ``G_b = G_parent @ C_b @ M_b @ C_b^T``; a bone starts where its parent ends.
 
@@ -506,9 +521,6 @@ class AcclaimClip:
                 # the rest vector itself.
                 local_t[:, k] = self.vectors[p]
         return forward_kinematics(self.parents, local_r, local_t, idx)
-
-    def global_positions(self, joints: Iterable[int] | None = None) -> np.ndarray:
-        return self.global_transforms(joints)[1]
 
 
 def _asf_sections(text: str) -> dict[str, list[str]]:
@@ -638,7 +650,7 @@ def read_asf_amc(asf_path: str | Path, amc_path: str | Path, fps: float = 120.0)
     frames: list[dict[str, list[float]]] = []
     for raw in read_text(amc_path).splitlines():
         line = raw.strip()
-        if not line or line.startswith("#") or line.startswith(":"):
+        if not line or line.startswith(("#", ":")):
             continue
         parts = line.split()
         if len(parts) == 1 and parts[0].isdigit():

@@ -19,7 +19,6 @@ ground truth of a cloning run.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,10 +61,19 @@ class Camera:
 
 def view_rotation(yaw_deg: float, pitch_deg: float = 0.0, roll_deg: float = 0.0) -> np.ndarray:
     """[3, 3] rotation taking the camera direction (yaw about Y from +Z, pitch up) to +Z."""
-    y, p, r = (math.radians(v) for v in (yaw_deg, pitch_deg, roll_deg))
-    ry = np.array([[math.cos(-y), 0, math.sin(-y)], [0, 1, 0], [-math.sin(-y), 0, math.cos(-y)]])
-    rx = np.array([[1, 0, 0], [0, math.cos(p), -math.sin(p)], [0, math.sin(p), math.cos(p)]])
-    rz = np.array([[math.cos(r), -math.sin(r), 0], [math.sin(r), math.cos(r), 0], [0, 0, 1]])
+    return view_rotations(np.array([yaw_deg]), np.array([pitch_deg]), np.array([roll_deg]))[0]
+
+
+def view_rotations(yaw_deg: np.ndarray, pitch_deg: np.ndarray, roll_deg: np.ndarray | None = None) -> np.ndarray:
+    """[B, 3, 3] ``Rz(roll) @ Rx(pitch) @ Ry(-yaw)`` for [B] angles in degrees."""
+    y = np.radians(np.asarray(yaw_deg, dtype=np.float64))
+    p = np.radians(np.asarray(pitch_deg, dtype=np.float64))
+    r = np.zeros_like(y) if roll_deg is None else np.radians(np.asarray(roll_deg, dtype=np.float64))
+    cy, sy, cp, sp, cr, sr = np.cos(y), np.sin(y), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
+    zero, one = np.zeros_like(y), np.ones_like(y)
+    ry = np.stack([cy, zero, -sy, zero, one, zero, sy, zero, cy], axis=-1).reshape(-1, 3, 3)  # Ry(-yaw)
+    rx = np.stack([one, zero, zero, zero, cp, -sp, zero, sp, cp], axis=-1).reshape(-1, 3, 3)
+    rz = np.stack([cr, -sr, zero, sr, cr, zero, zero, zero, one], axis=-1).reshape(-1, 3, 3)
     return rz @ rx @ ry
 
 
@@ -84,18 +92,19 @@ def frame_camera(
     return Camera(yaw_deg, pitch_deg, roll_deg, scale=FRAME_SCALE * h, tx=w / 2.0, ty=FRAME_GROUND * h)
 
 
+_ACROSS = np.array([joint_index(n) for n in ("l_hip", "r_hip", "l_shoulder", "r_shoulder")])
+
+
 def facing_vectors(positions: np.ndarray) -> np.ndarray:
-    """[T, 2] unit (x, z) facing direction per frame, from the hips' and shoulders' left-right axis.
+    """[..., T, 2] unit (x, z) facing direction per frame, from the hips' and shoulders' left-right axis.
 
     Args:
-        positions: [T, 18, 3] world joints (Y up).
+        positions: [..., T, 18, 3] world joints (Y up).
     """
-    left = (
-        positions[:, joint_index("l_hip")] - positions[:, joint_index("r_hip")]
-        + positions[:, joint_index("l_shoulder")] - positions[:, joint_index("r_shoulder")]
-    )
+    p = np.asarray(positions, dtype=np.float64)[..., _ACROSS, :]  # [..., T, 4, 3]
+    left = p[..., 0, :] - p[..., 1, :] + p[..., 2, :] - p[..., 3, :]
     # forward = left x up, with up = +Y: (-left_z, 0, left_x).
-    fwd = np.stack([-left[:, 2], left[:, 0]], axis=-1).astype(np.float64)
+    fwd = np.stack([-left[..., 2], left[..., 0]], axis=-1)
     norm = np.linalg.norm(fwd, axis=-1, keepdims=True)
     return fwd / np.maximum(norm, 1e-9)
 
@@ -107,8 +116,13 @@ def facing_angle(motion: Motion3D | np.ndarray) -> float:
         motion: a ``Motion3D`` or its [T, 18, 3] positions.
     """
     pos = motion.positions if isinstance(motion, Motion3D) else np.asarray(motion)
-    fwd = facing_vectors(pos).mean(axis=0)
-    return math.degrees(math.atan2(fwd[0], fwd[1]))
+    return float(facing_angles(pos))
+
+
+def facing_angles(positions: np.ndarray) -> np.ndarray:
+    """[...] average facing in degrees of [..., T, 18, 3] clips (batched ``facing_angle``)."""
+    fwd = facing_vectors(positions).mean(axis=-2)
+    return np.degrees(np.arctan2(fwd[..., 0], fwd[..., 1]))
 
 
 def project(
@@ -144,6 +158,18 @@ def ground_origin(positions: np.ndarray) -> np.ndarray:
 
 
 __all__ = [
-    "CANVAS_SIZE", "Camera", "FRAME_GROUND", "FRAME_SCALE", "MAX_PITCH", "VIEW_YAWS", "facing_angle",
-    "facing_vectors", "frame_camera", "ground_origin", "project", "view_rotation",
+    "CANVAS_SIZE",
+    "FRAME_GROUND",
+    "FRAME_SCALE",
+    "MAX_PITCH",
+    "VIEW_YAWS",
+    "Camera",
+    "facing_angle",
+    "facing_angles",
+    "facing_vectors",
+    "frame_camera",
+    "ground_origin",
+    "project",
+    "view_rotation",
+    "view_rotations",
 ]

@@ -20,9 +20,10 @@ import json
 import logging
 import re
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable, NamedTuple, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -34,10 +35,9 @@ from retarget.world.camera import (
     MAX_PITCH,
     VIEW_YAWS,
     Camera,
-    facing_angle,
+    facing_angles,
     frame_camera,
-    ground_origin,
-    project,
+    view_rotations,
 )
 from retarget.world.rigs import load_motion, motion_name
 from retarget.world.skeleton import (
@@ -55,6 +55,7 @@ log = logging.getLogger(__name__)
 # Bump when anything that changes the cached arrays changes (rig mapping, head points, sampling...).
 WORLD_VERSION = 2
 SPLITS: tuple[str, ...] = ("train", "val", "test")
+_ROOT = WORLD_JOINTS.index("mid_hip")
 _BODY15_IDX = np.array([WORLD_JOINTS.index(n) for n in BODY15.joints], dtype=np.int64)
 _MOCAP_SUFFIXES = (".bvh", ".bvh.gz", ".amc")
 
@@ -275,7 +276,8 @@ class WorldSplit:
             raise IndexError(f"{self.name}: character {character} out of range 0..{self.num_characters - 1}")
         frames = self._frames(motion, self.window_length if length is None else length, offset)
         pos = np.array(self.positions[character, frames], dtype=np.float32)
-        pos -= ground_origin(pos).astype(np.float32)
+        pos[..., 0] -= pos[0, _ROOT, 0]
+        pos[..., 2] -= pos[0, _ROOT, 2]
         return pos
 
     def camera(self, view: int, pitch_deg: float = 0.0) -> Camera:
@@ -308,11 +310,8 @@ class WorldSplit:
             rng: draws the pitch uniformly in +-``MAX_PITCH`` degrees; None: pitch 0.
             pitch_deg: an explicit pitch (overrides ``rng``).
         """
-        pos = self.window3d(motion, character, length, offset)
-        if pitch_deg is None:
-            pitch_deg = float(rng.uniform(-MAX_PITCH, MAX_PITCH)) if rng is not None else 0.0
-        xy, _ = project(pos, self.camera(view, pitch_deg), facing_angle(pos))
-        return xy[:, _BODY15_IDX]
+        pitch = None if pitch_deg is None else [pitch_deg]
+        return self.windows([motion], [character], [view], length, rng, offset, pitch)[0]
 
     def windows(
         self,
@@ -321,11 +320,41 @@ class WorldSplit:
         views: Sequence[int],
         length: int | None = None,
         rng: np.random.Generator | None = None,
+        offset: int = 0,
+        pitch_deg: Sequence[float] | None = None,
     ) -> np.ndarray:
-        """[B, length, 15, 2] a batch of ``window`` calls (same arguments, element-wise)."""
+        """[B, length, 15, 2] float32: ``window`` for B (motion, character, view) triples at once.
+
+        Args:
+            motions, characters, views: [B] indices.
+            length: frames (default the world's window).
+            rng: draws each pitch uniformly in +-``MAX_PITCH``; None: pitch 0.
+            offset: frames after each window's start.
+            pitch_deg: [B] explicit pitches (override ``rng``).
+        """
         if not len(motions) == len(characters) == len(views):
             raise ValueError("motions, characters and views must have the same length")
-        return np.stack([self.window(m, c, v, length, 0, rng) for m, c, v in zip(motions, characters, views)])
+        b = len(motions)
+        views_a = np.asarray(views, dtype=np.int64)
+        if ((views_a < 0) | (views_a >= self.num_views)).any():
+            raise IndexError(f"views must be in 0..{self.num_views - 1}")
+        pos = np.stack([self.window3d(m, c, length, offset) for m, c in zip(motions, characters)])  # [B, L, 18, 3]
+        if pitch_deg is not None:
+            pitch = np.asarray(pitch_deg, dtype=np.float64).reshape(b)
+        elif rng is not None:
+            pitch = rng.uniform(-MAX_PITCH, MAX_PITCH, size=b)
+        else:
+            pitch = np.zeros(b)
+        yaw = np.asarray(self.views, dtype=np.float64)[views_a] + facing_angles(pos)
+        rot = view_rotations(yaw, pitch)  # [B, 3, 3]
+        rot = rot[:, None, None, :2, :].astype(np.float32)  # [B, 1, 1, 2, 3]: only camera x and y are needed
+        pts = pos[:, :, _BODY15_IDX, None, :]  # [B, L, 15, 1, 3]
+        cam = (rot * pts).sum(axis=-1)  # [B, L, 15, 2] camera x, y (metres, y up)
+        ref = frame_camera(0.0, 0.0, self.canvas_size)
+        cam *= np.float32(ref.scale)
+        cam[..., 0] += np.float32(ref.tx)
+        cam[..., 1] = np.float32(ref.ty) - cam[..., 1]
+        return cam
 
 
 class MotionWorld:
@@ -552,6 +581,16 @@ def _write_world(
 
 
 __all__ = [
-    "MotionWorld", "SPLITS", "WORLD_VERSION", "WindowLabel", "WorldConfig", "WorldSplit", "assign_splits",
-    "default_cache_dir", "find_mocap_files", "make_characters", "motion_group", "window_starts",
+    "SPLITS",
+    "WORLD_VERSION",
+    "MotionWorld",
+    "WindowLabel",
+    "WorldConfig",
+    "WorldSplit",
+    "assign_splits",
+    "default_cache_dir",
+    "find_mocap_files",
+    "make_characters",
+    "motion_group",
+    "window_starts",
 ]

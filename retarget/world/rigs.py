@@ -23,10 +23,11 @@ import json
 import logging
 import math
 import re
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Callable, Mapping, Protocol
+from typing import Protocol
 
 import numpy as np
 
@@ -72,7 +73,7 @@ _TYPICAL_HEIGHT = 1.7
 def _norm(name: str) -> str:
     """Normalised joint name: no namespace (``mixamorig:``), no rig prefix, lower case, no separators."""
     name = name.rsplit(":", 1)[-1].lower()
-    for prefix in ("cc_base_", "rl_", "mixamorig_", "mixamorig"):
+    for prefix in ("cc_base_", "rl_", "mixamorig_", "mixamorig", "bip001", "bip01"):
         if name.startswith(prefix) and len(name) > len(prefix):
             name = name[len(prefix):]
             break
@@ -145,6 +146,12 @@ RIGS: dict[str, RigNaming] = {
         "l_shoulder": ("lupperarm",), "l_elbow": ("lforearm",), "l_wrist": ("lhand",),
         "neck": ("necktwist01", "neck"), "head": ("head",),
     }, _prefix), markers=("lthigh", "lcalf")),
+    # 3ds Max Biped: "Bip01 L Thigh", "Bip01 L Calf", ..., "Bip01 L Toe0".
+    "max_biped": RigNaming("max_biped", _sided({
+        "l_hip": ("lthigh",), "l_knee": ("lcalf",), "l_ankle": ("lfoot",), "l_big_toe": ("ltoe0",),
+        "l_shoulder": ("lupperarm",), "l_elbow": ("lforearm",), "l_wrist": ("lhand",), "neck": ("neck",),
+        "head": ("head",),
+    }, _prefix), prefix="bip0"),
     # Acclaim ASF bones (CMU): a joint sits at its bone's start, so lfemur is the hip and ltibia the knee.
     "acclaim": RigNaming("acclaim", _sided({
         "l_hip": ("lfemur",), "l_knee": ("ltibia",), "l_ankle": ("lfoot",), "l_big_toe": ("ltoes",),

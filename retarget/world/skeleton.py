@@ -12,8 +12,8 @@ and the feet are kept on the ground.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import numpy as np
 
@@ -400,7 +400,25 @@ def describe(skeleton: Skeleton) -> str:
 
 
 __all__ = [
-    "BONES", "BONE_NAMES", "FOOT_JOINTS", "MAX_HEIGHT", "MIN_HEIGHT", "Motion3D", "NAMED_CHARACTERS", "ROOT",
-    "Skeleton", "WORLD_JOINTS", "assemble", "bone_lengths", "bone_vectors", "describe", "joint_index",
-    "make_skeleton", "normalise_placement", "resample", "retarget_3d", "sample_skeleton", "skeleton_of",
+    "BONES",
+    "BONE_NAMES",
+    "FOOT_JOINTS",
+    "MAX_HEIGHT",
+    "MIN_HEIGHT",
+    "NAMED_CHARACTERS",
+    "ROOT",
+    "WORLD_JOINTS",
+    "Motion3D",
+    "Skeleton",
+    "assemble",
+    "bone_lengths",
+    "bone_vectors",
+    "describe",
+    "joint_index",
+    "make_skeleton",
+    "normalise_placement",
+    "resample",
+    "retarget_3d",
+    "sample_skeleton",
+    "skeleton_of",
 ]

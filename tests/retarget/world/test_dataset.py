@@ -1,0 +1,169 @@
+"""The motion world dataset on a tiny world, and `clone world build`."""
+
+from __future__ import annotations
+
+import itertools
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pose_io.errors import InputError
+from pose_io.layouts import BODY15
+from retarget.world import NAMED_CHARACTERS, WORLD_JOINTS, MotionWorld, facing_angle, project
+from retarget.world import dataset as dataset_module
+from retarget.world.dataset import assign_splits, motion_group, window_starts
+
+J = WORLD_JOINTS.index
+TINY_FILES = (
+    "bandai_namco/dataset-1/dataset-1_walk_normal_001.bvh.gz",
+    "bandai_namco/dataset-1/dataset-1_bow_normal_001.bvh.gz",
+    "bandai_namco/dataset-2/dataset-2_walk_normal_001.bvh.gz",
+    "bandai_namco/dataset-2/dataset-2_walk_normal_002.bvh.gz",
+)
+SMALL = {"n_train_characters": 3, "n_val_characters": 2, "n_test_characters": 2}
+
+
+@pytest.fixture(scope="module")
+def tiny_mocap(shared_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("mocap")
+    for rel in TINY_FILES:
+        dest = root / "bandai" / Path(rel).name
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(shared_dir / "mocap" / rel, dest)
+    return root
+
+
+@pytest.fixture(scope="module")
+def tiny_world(tiny_mocap: Path, tmp_path_factory: pytest.TempPathFactory) -> MotionWorld:
+    return MotionWorld.build(tiny_mocap, tmp_path_factory.mktemp("cache"), **SMALL)
+
+
+def test_splits_share_no_motion_and_no_character(tiny_world: MotionWorld) -> None:
+    splits = {name: tiny_world.split(name) for name in ("train", "val", "test")}
+    groups = {name: {lab.group for lab in s.window_labels} for name, s in splits.items()}
+    paths = {name: {lab.path for lab in s.window_labels} for name, s in splits.items()}
+    for a, b in itertools.combinations(splits, 2):
+        assert not groups[a] & groups[b], (a, b)
+        assert not paths[a] & paths[b], (a, b)
+    # The two takes of dataset-2 walk_normal are one motion: they share a split.
+    assert any(len(p) == 2 for p in paths.values())
+    lengths = {name: {c.lengths for c in s.characters} for name, s in splits.items()}
+    for a, b in itertools.combinations(splits, 2):
+        assert not lengths[a] & lengths[b]
+    assert set(NAMED_CHARACTERS) <= set(splits["test"].character_names)
+    assert not set(NAMED_CHARACTERS) & set(splits["train"].character_names)
+    assert [splits[n].num_characters for n in splits] == [3, 2, 2 + len(NAMED_CHARACTERS)]
+
+
+def test_summary_counts(tiny_world: MotionWorld) -> None:
+    summary = tiny_world.summary()
+    for name, s in summary["splits"].items():
+        split = tiny_world.split(name)
+        assert s["windows"] == split.num_motions == len(split.window_labels) > 0
+        assert s["characters"] == split.num_characters
+        assert s["views"] == split.num_views == 13
+        assert s["samples"] == s["windows"] * s["characters"] * 13
+    assert sum(s["clips"] for s in summary["splits"].values()) == 4
+    assert summary["cache"] == str(tiny_world.path)
+
+
+def test_windows_follow_the_framing_rule(tiny_world: MotionWorld) -> None:
+    split = tiny_world.split("train")
+    front = split.views.index(0.0)
+    for motion in range(split.num_motions):
+        label = split.window_labels[motion]
+        assert 0 <= label.start and label.start + 64 <= label.clip_frames
+        win = split.window(motion, 1, front)
+        assert win.shape == (64, 15, 2) and win.dtype == np.float32
+        assert win[0, BODY15.index("mid_hip"), 0] == pytest.approx(256.0, abs=1e-3)
+        # Some foot is on the ground line (0.9 * 512) in the first frame.
+        feet = win[0, [BODY15.index("l_ankle"), BODY15.index("r_ankle")], 1].max()
+        assert 440 < feet < 470
+    # The 2D window is the projection of the 3D window.
+    pos = split.window3d(0, 2)
+    assert pos.shape == (64, 18, 3)
+    np.testing.assert_allclose(pos[0, J("mid_hip"), [0, 2]], 0.0, atol=1e-6)
+    xy, _ = project(pos, split.camera(4, 3.0), facing_angle(pos))
+    np.testing.assert_allclose(split.window(0, 2, 4, pitch_deg=3.0), xy[:, : len(BODY15)], atol=1e-4)
+
+
+def test_characters_and_views_change_the_window(tiny_world: MotionWorld) -> None:
+    split = tiny_world.split("test")
+    a = split.window(0, 0, 6)
+    assert not np.allclose(a, split.window(0, 1, 6))
+    assert not np.allclose(a, split.window(0, 0, 0))
+    # A random pitch within +-10 degrees; None gives pitch 0.
+    rng = np.random.default_rng(0)
+    jittered = split.window(0, 0, 6, rng=rng)
+    assert not np.allclose(a, jittered)
+    np.testing.assert_array_equal(a, split.window(0, 0, 6, rng=None))
+    batch = split.windows([0, 0], [0, 1], [6, 6])
+    np.testing.assert_array_equal(batch[0], a)
+    # Longer or shifted windows must stay inside the clip.
+    label = split.window_labels[0]
+    with pytest.raises(ValueError, match="outside clip"):
+        split.window(0, 0, 6, length=64, offset=label.clip_frames - label.start - 63)
+    assert split.window(0, 0, 6, length=32, offset=16).shape == (32, 15, 2)
+    with pytest.raises(IndexError):
+        split.window(split.num_motions, 0, 0)
+
+
+def test_second_build_comes_from_the_cache(
+    tiny_mocap: Path, tiny_world: MotionWorld, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_loading(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the cache was not used")
+
+    monkeypatch.setattr(dataset_module, "load_motion", no_loading)
+    again = MotionWorld.build(tiny_mocap, tiny_world.path.parent, **SMALL)
+    assert again.path == tiny_world.path
+    np.testing.assert_array_equal(again.split("val").window(0, 0, 3), tiny_world.split("val").window(0, 0, 3))
+    with pytest.raises(AssertionError, match="cache"):
+        MotionWorld.build(tiny_mocap, tiny_world.path.parent, **dict(SMALL, seed=1))
+
+
+def test_build_errors(tmp_path: Path, shared_dir: Path) -> None:
+    with pytest.raises(InputError, match="no such folder"):
+        MotionWorld.build(tmp_path / "none", tmp_path / "cache")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="no .bvh"):
+        MotionWorld.build(tmp_path / "empty", tmp_path / "cache")
+    one = tmp_path / "one"
+    one.mkdir()
+    shutil.copy(shared_dir / "mocap" / TINY_FILES[0], one)
+    with pytest.raises(InputError, match="too few distinct motions"):
+        MotionWorld.build(one, tmp_path / "cache", **SMALL)
+    assert not any((tmp_path / "cache").glob("world-*"))  # nothing half-written
+
+
+def test_motion_groups_and_split_assignment() -> None:
+    assert motion_group("cmu/01_01.bvh.gz") == motion_group("x/01_01.amc") == motion_group("002/001_01.bvh") == "cmu:1_1"
+    assert motion_group("b/dataset-2_walk_normal_002.bvh.gz") == "dataset-2_walk_normal"
+    assert window_starts(100, 64, 32) == [0, 32, 36]
+    assert window_starts(96, 64, 32) == [0, 32] and window_starts(50, 64, 32) == []
+    from retarget.world.dataset import WorldConfig
+
+    groups = [f"g{k}" for k in range(20)] + ["g0"]
+    sources = ["a"] * 21
+    frames = [100] * 21
+    split = assign_splits(groups, sources, frames, WorldConfig())
+    assert split[0] == split[-1]  # same group, same split
+    assert {"train", "val", "test"} == set(split)
+    assert split.count("train") > 12
+
+
+def test_cli_world_build(tiny_mocap: Path, tmp_path: Path) -> None:
+    from clone.cli.main import app
+
+    runner = CliRunner()
+    args = ["world", "build", "--mocap", str(tiny_mocap), "--cache", str(tmp_path / "cache"),
+            "--train-characters", "2", "--val-characters", "1", "--test-characters", "1"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "train" in result.output and "val" in result.output and "cache:" in result.output
+    assert any((tmp_path / "cache").glob("world-*/meta.json"))
+    result = runner.invoke(app, ["world", "build", "--mocap", str(tmp_path / "missing")])
+    assert result.exit_code == 2 and "error:" in result.output
