@@ -497,7 +497,11 @@ def _validation_set(split: WorldSplit, config: TrainConfig) -> tuple[torch.Tenso
 
 def _loader(dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int) -> Iterator:
     indices = range(first_step * batch_size, steps * batch_size)
-    return iter(DataLoader(dataset, batch_size=batch_size, sampler=indices, num_workers=workers, drop_last=True))
+    # Its own generator: a loader would otherwise draw its worker seed from the global RNG, and a resumed
+    # run would then drop out differently. Samples depend on (seed, epoch, index) only.
+    loader = DataLoader(dataset, batch_size=batch_size, sampler=indices, num_workers=workers, drop_last=True,
+                        generator=torch.Generator())
+    return iter(loader)
 
 
 def _format(losses: dict[str, float], prefix: str = "") -> str:

@@ -38,6 +38,8 @@ def _root(
 # Verb groups register below, one line each, as they land.
 from clone.cli.pose import pose_app  # noqa: E402
 app.add_typer(pose_app, name="pose")
+from clone.cli.retarget import retarget_app  # noqa: E402
+app.add_typer(retarget_app, name="retarget")
 from clone.cli.world import world_app  # noqa: E402
 app.add_typer(world_app, name="world")
 from clone.cli.synth import synth_app  # noqa: E402

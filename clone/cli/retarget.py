@@ -1,0 +1,98 @@
+"""`clone retarget`: move a driver's motion onto a reference person's skeleton and view; train the network.
+
+torch and the pose readers are imported inside the commands so that `clone --help` stays fast.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from clone.cli.common import console, device_option, user_errors
+
+retarget_app = typer.Typer(
+    help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
+    no_args_is_help=True,
+)
+
+_SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
+
+
+@retarget_app.command("apply")
+@user_errors
+def apply(
+    motion_poses: Path = typer.Argument(..., help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv)."),
+    skeleton: Path = typer.Option(..., "--skeleton", help="Reference person's poses: skeleton, placement, frame."),
+    view: Optional[Path] = typer.Option(None, "--view", help="Poses whose camera view to use (default: --skeleton's)."),
+    out: Path = typer.Option(..., "--out", help="Output: a folder (OpenPose JSON), or a .npz / .csv file."),
+    preview: Optional[Path] = typer.Option(None, "--preview", help="Also draw the result into this .mp4."),
+    weights: Optional[Path] = typer.Option(
+        None, "--weights", help="clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped weights)."
+    ),
+    size: Optional[str] = typer.Option(None, "--size", help=_SIZE_HELP),
+    device: str = device_option(),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
+) -> None:
+    """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
+    from pose_io.atomic import check_new_output
+    from pose_io.readers import parse_size, read_track
+    from pose_io.video import write_pose_video
+    from pose_io.writers import output_format, write_track
+    from retarget.api import load_retargeter
+    from retarget.runtime import configure_threads
+
+    check_new_output(out, overwrite)
+    output_format(out)  # an unsupported suffix fails before any work
+    if preview is not None:
+        check_new_output(preview, overwrite)
+    image_size = parse_size(size) if size else None
+    motion = read_track(motion_poses, image_size=image_size)
+    reference = read_track(skeleton, image_size=image_size)
+    view_track = read_track(view, image_size=image_size) if view is not None else None
+    configure_threads()
+    retargeter = load_retargeter(weights, device)
+    codes = retargeter.reference_codes(reference, view_track, name=str(skeleton), view_name=str(view))
+    result = retargeter.retarget(motion, codes, name=str(motion_poses))
+    write_track(result, out, overwrite=overwrite)
+    console.print(f"wrote {out} ({len(result)} frames, body15, {result.image_size[0]}x{result.image_size[1]})")
+    if preview is not None:
+        write_pose_video(result, preview, overwrite=overwrite)
+        console.print(f"wrote {preview}")
+
+
+@retarget_app.command("train")
+@user_errors
+def train(
+    mocap: Path = typer.Option(..., "--mocap", help="Motion-capture folder the synthetic world is built from."),
+    out: Path = typer.Option(..., "--out", help="Checkpoint file to write (rewritten after every epoch)."),
+    real: Optional[Path] = typer.Option(None, "--real", help="Folder of OpenPose folders: unlabelled real tracks."),
+    minutes: Optional[float] = typer.Option(None, "--minutes", min=0.0, help="Wall-clock budget of this run."),
+    epochs: Optional[int] = typer.Option(None, "--epochs", min=1, help="Total epochs (default 300 without --minutes)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the run stored in --out."),
+    variant: str = typer.Option("full", "--variant", help="Network: full | skeleton | view."),
+    ablation: str = typer.Option("full", "--ablation", help="Objective: full | no-triplet | recon-triplet."),
+    cache: Optional[Path] = typer.Option(None, "--cache", help="World cache folder (default: <out>.world-cache)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random choice."),
+    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: the free cores)."),
+    device: str = device_option(),
+) -> None:
+    """Train the retargeting network on the motion world built from --mocap."""
+    from pose_io.errors import InputError
+    from retarget.losses import ablation_config
+    from retarget.runtime import configure_threads
+    from retarget.train import TrainConfig
+    from retarget.train import train as run_training
+
+    try:
+        config = TrainConfig(variant=variant, loss=ablation_config(ablation), seed=seed)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    configure_threads(threads)
+    summary = run_training(
+        mocap, out, cache_dir=cache, real_dir=real, config=config, device=device, epochs=epochs,
+        minutes=minutes, resume=resume,
+    )
+    why = "time budget used up" if summary.stopped == "time" else "all epochs done"
+    console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")

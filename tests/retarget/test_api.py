@@ -1,0 +1,145 @@
+import dataclasses
+
+import numpy as np
+import pytest
+import torch
+
+from pose_io import InputError, PoseTrack
+from pose_io.readers import read_track
+from retarget import api
+from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
+from retarget.baselines import limb_lengths
+from retarget.preprocess import hold_fill, placement_of, pose_heights, smooth, to_body15
+
+
+@pytest.fixture(scope="module")
+def weights_dir(shared_dir):
+    return shared_dir / "official_2dmr" / "weights"
+
+
+@pytest.fixture(scope="module")
+def retargeter(weights_dir):
+    torch.set_num_threads(1)
+    return load_retargeter(weights_dir / "pretrained_full.pth")
+
+
+@pytest.fixture(scope="module")
+def clips(shared_dir):
+    return {c: read_track(shared_dir / "openpose_examples" / c, image_size=(720, 720)) for c in ("tall_man", "small_man")}
+
+
+def _clean(track: PoseTrack) -> np.ndarray:
+    """The track as the network sees it, in its own pixels: filled and smoothed body15."""
+    return smooth(hold_fill(to_body15(track).joints.astype(np.float64)), 2.0)
+
+
+def _tiled(track: PoseTrack, frames: int) -> PoseTrack:
+    reps = frames // len(track) + 1
+    # Play forwards then backwards so the tiled track has no jumps.
+    joints = np.concatenate([track.joints, track.joints[::-1]] * reps)[:frames]
+    conf = np.concatenate([track.confidence, track.confidence[::-1]] * reps)[:frames]
+    return track.replace(joints=joints, confidence=conf)
+
+
+@pytest.mark.parametrize("frames", [16, 17, 23, 64, 121])
+def test_any_length_gives_as_many_frames(retargeter, clips, frames):
+    reference = retargeter.reference_codes(clips["tall_man"])
+    out = retargeter.retarget(clips["small_man"].frames(0, frames), reference)
+    assert len(out) == frames and out.layout == "body15"
+    assert out.image_size == clips["tall_man"].image_size and out.fps == clips["small_man"].fps
+    assert not out.missing.any()
+
+
+def test_long_tracks_in_windows_match_one_pass(retargeter, clips):
+    track = _tiled(clips["small_man"], 700)
+    reference = retargeter.reference_codes(clips["tall_man"])
+    windowed = dataclasses.replace(retargeter, config=InferenceConfig(window=128, overlap=32))
+    one_pass = dataclasses.replace(retargeter, config=InferenceConfig(window=1024))
+    a = windowed.retarget(track, reference).joints
+    b = one_pass.retarget(track, reference).joints
+    assert len(a) == 700
+    rel = lambda j: j - j[:, 8:9]  # noqa: E731  root-relative pose
+    height = np.median(pose_heights(b))
+    assert np.abs(rel(a) - rel(b)).mean() < 0.002 * height
+    assert np.abs(np.diff(a, axis=0)).max() < 1.2 * np.abs(np.diff(b, axis=0)).max()  # no jumps where windows meet
+
+
+def test_retargeting_onto_its_own_skeleton_and_view_reproduces_the_clip(retargeter, clips):
+    for track in clips.values():
+        out = retargeter.retarget(track, retargeter.reference_codes(track)).joints
+        truth = _clean(track)
+        height = np.median(pose_heights(truth))
+        pose_error = np.linalg.norm((out - out[:, 8:9]) - (truth - truth[:, 8:9]), axis=-1).mean()
+        place_error = np.linalg.norm(out - truth, axis=-1).mean()
+        # The authors' own reconstruction of these clips is off by 2.3 % (tall) and 2.4 % (small) of the height.
+        assert pose_error < 0.03 * height
+        assert place_error < 0.05 * height
+
+
+def test_tall_motion_on_small_skeleton_takes_the_small_limbs(retargeter, clips):
+    tall, small = clips["tall_man"], clips["small_man"]
+    out = retargeter.retarget(tall, retargeter.reference_codes(small))
+    lengths = limb_lengths(out.joints, 0.5)
+    to_small = np.abs(lengths - limb_lengths(_clean(small), 0.5)).mean()
+    to_tall = np.abs(lengths - limb_lengths(_clean(tall), 0.5)).mean()
+    assert to_small < 0.25 * to_tall
+    assert np.median(pose_heights(out.joints)) == pytest.approx(np.median(pose_heights(_clean(small))), rel=0.15)
+
+
+def test_output_stands_where_the_reference_stands(retargeter, clips):
+    reference = retargeter.reference_codes(clips["small_man"])
+    out = retargeter.retarget(clips["tall_man"], reference)
+    placed = placement_of(out.joints)
+    assert placed.root_x == pytest.approx(reference.placement.root_x, abs=1e-3)
+    assert placed.ground_y == pytest.approx(reference.placement.ground_y, abs=1e-3)
+
+
+def test_reference_codes_round_trip_through_a_checkpoint(retargeter, clips, tmp_path):
+    codes = retargeter.reference_codes(clips["small_man"], view=clips["tall_man"])
+    data = codes.to_dict()
+    assert all(isinstance(v, np.ndarray) for v in data.values())
+    torch.save({k: torch.from_numpy(v) for k, v in data.items()}, tmp_path / "ref.pt")
+    back = ReferenceCodes.from_dict(torch.load(tmp_path / "ref.pt", weights_only=True))
+    np.testing.assert_array_equal(back.body, codes.body)
+    np.testing.assert_array_equal(back.view, codes.view)
+    assert back.placement == codes.placement and back.image_size == codes.image_size
+    assert retargeter.retarget(clips["tall_man"], back).equals(retargeter.retarget(clips["tall_man"], codes))
+    with pytest.raises(InputError, match="malformed"):
+        ReferenceCodes.from_dict({"body": codes.body})
+
+
+def test_view_code_comes_from_the_view_track(retargeter, clips):
+    own = retargeter.reference_codes(clips["small_man"])
+    other = retargeter.reference_codes(clips["small_man"], view=clips["tall_man"])
+    np.testing.assert_array_equal(own.body, other.body)
+    np.testing.assert_array_equal(other.view, retargeter.reference_codes(clips["tall_man"]).view)
+
+
+def test_bad_inputs(retargeter, clips, weights_dir):
+    small = clips["small_man"]
+    reference = retargeter.reference_codes(small)
+    with pytest.raises(InputError, match="driver.json: 15 frames; the retargeting network needs at least 16"):
+        retargeter.retarget(small.frames(0, 15), reference, name="driver.json")
+    nobody = small.replace(confidence=np.zeros_like(small.confidence))
+    with pytest.raises(InputError, match="no joints detected"):
+        retargeter.retarget(nobody, reference)
+    with pytest.raises(InputError, match="no joints detected"):
+        retargeter.reference_codes(nobody)
+    skeleton_model = load_retargeter(weights_dir / "pretrained_skeleton.pth")
+    with pytest.raises(InputError, match="different retargeting model"):
+        retargeter.retarget(small, skeleton_model.reference_codes(small))
+    with pytest.raises(InputError, match="unknown device"):
+        load_retargeter(weights_dir / "pretrained_full.pth", device="tpu")
+
+
+def test_other_layouts_are_converted(retargeter, clips):
+    small = clips["small_man"]
+    coco = small.to_layout("coco18")
+    out = retargeter.retarget(coco, retargeter.reference_codes(small))
+    assert len(out) == len(small)
+
+
+def test_missing_packaged_weights_say_what_to_do(monkeypatch, tmp_path):
+    monkeypatch.setattr(api, "PACKAGED_WEIGHTS", tmp_path / "clone2d_full.pt")
+    with pytest.raises(InputError, match="no trained retargeting weights are shipped yet.*--weights"):
+        load_retargeter()

@@ -1,0 +1,200 @@
+import shutil
+
+import numpy as np
+import pytest
+import torch
+
+from pose_io import BODY15, InputError, PoseTrack
+from retarget.api import load_retargeter
+from retarget.augment import AugmentConfig, combo_index
+from retarget.checkpoint import load_checkpoint
+from retarget.losses import objective
+from retarget.model import RetargetNet, variant_config
+from retarget.train import (
+    CrossSamples,
+    TrainConfig,
+    batch_tensors,
+    fit,
+    split_statistics,
+    train,
+    train_step,
+)
+
+_PARENT = {
+    "neck": "mid_hip", "nose": "neck", "r_shoulder": "neck", "r_elbow": "r_shoulder", "r_wrist": "r_elbow",
+    "l_shoulder": "neck", "l_elbow": "l_shoulder", "l_wrist": "l_elbow", "r_hip": "mid_hip", "r_knee": "r_hip",
+    "r_ankle": "r_knee", "l_hip": "mid_hip", "l_knee": "l_hip", "l_ankle": "l_knee",
+}
+_OFFSET = {
+    "neck": (0, 0.5, 0), "nose": (0, 0.2, 0.06), "r_shoulder": (-0.18, 0, 0), "r_elbow": (0, -0.28, 0),
+    "r_wrist": (0, -0.25, 0), "l_shoulder": (0.18, 0, 0), "l_elbow": (0, -0.28, 0), "l_wrist": (0, -0.25, 0),
+    "r_hip": (-0.1, 0, 0), "r_knee": (0, -0.42, 0), "r_ankle": (0, -0.4, 0), "l_hip": (0.1, 0, 0),
+    "l_knee": (0, -0.42, 0), "l_ankle": (0, -0.4, 0),
+}
+
+
+class FakeSplit:
+    """A tiny stand-in for a motion-world split: swinging stick figures.
+
+    Motions differ in swing amplitude, frequency and travel; characters in limb lengths; views in the
+    yaw of an orthographic camera. ``rng`` tilts the camera a little, like the world's random pitch.
+    """
+
+    def __init__(self, motions: int = 4, characters: int = 3, views: int = 3, seed: int = 0) -> None:
+        rng = np.random.default_rng(seed)
+        self.num_motions, self.num_characters, self.num_views = motions, characters, views
+        self.motions = [
+            dict(amp=rng.uniform(0.2, 0.9), freq=rng.uniform(0.05, 0.2), phase=rng.uniform(0, 6),
+                 speed=rng.uniform(-0.02, 0.02))
+            for _ in range(motions)
+        ]
+        self.characters = [{n: rng.uniform(0.8, 1.25) for n in _PARENT} for _ in range(characters)]
+        self.yaws = np.linspace(-1.0, 1.0, views)
+
+    def window(self, motion, character, view, length=64, offset=0, rng=None):
+        t = np.arange(offset, offset + length, dtype=np.float64)
+        m, ch = self.motions[motion], self.characters[character]
+        swing = m["amp"] * np.sin(2 * np.pi * m["freq"] * t + m["phase"])
+        angle = {"r_elbow": swing, "r_wrist": swing + 0.3, "l_elbow": -swing, "l_wrist": 0.3 - swing,
+                 "r_knee": -swing, "r_ankle": -1.2 * swing, "l_knee": swing, "l_ankle": 1.2 * swing}
+        pos = {"mid_hip": np.stack([m["speed"] * t, 0.82 + 0.03 * np.abs(swing), 0.5 * m["speed"] * t], -1)}
+        for name in _PARENT:  # parents come first in this dict
+            a = angle.get(name, np.zeros_like(t))
+            off = np.array(_OFFSET[name]) * ch[name]
+            rotated = np.stack([np.full_like(a, off[0]), np.cos(a) * off[1] - np.sin(a) * off[2],
+                                np.sin(a) * off[1] + np.cos(a) * off[2]], -1)
+            pos[name] = pos[_PARENT[name]] + rotated
+        xyz = np.stack([pos[n] for n in BODY15.joints], axis=1)  # [T, 15, 3]
+        yaw = self.yaws[view] + (rng.uniform(-0.1, 0.1) if rng is not None else 0.0)
+        x = np.cos(yaw) * xyz[..., 0] + np.sin(yaw) * xyz[..., 2]
+        return np.stack([256 + 110 * x, 420 - 110 * xyz[..., 1]], -1).astype(np.float32)
+
+
+TINY = TrainConfig(batch_size=4, samples_per_epoch=8, val_samples=4, stats_windows=32)
+
+
+def _batch(split, n=4, seed=0, variant="full"):
+    samples = CrossSamples(split, 64, variant, n, seed)
+    items = [samples.sample(0, i) for i in range(n)]
+    return {
+        "windows": torch.from_numpy(np.stack([it["windows"] for it in items])),
+        "ids": torch.from_numpy(np.stack([it["ids"] for it in items])),
+    }
+
+
+def test_samples_are_deterministic_and_consistent():
+    split = FakeSplit()
+    samples = CrossSamples(split, 64, "full", 10, seed=3)
+    a, b = samples.sample(2, 5), samples.sample(2, 5)
+    np.testing.assert_array_equal(a["windows"], b["windows"])
+    ids = a["ids"]
+    assert (ids[0] != ids[1]).all()  # full model: motions, characters and views all differ
+    w = a["windows"]
+    # Every window is the world's window of its combination, seen through the view slot's camera.
+    for k, (m, c, v) in enumerate([(m, c, v) for m in (0, 1) for c in (0, 1) for v in (0, 1)]):
+        clean = split.window(ids[m, 0], ids[c, 1], ids[v, 2], length=64)
+        assert np.abs(w[k] - clean).max() < 40  # within the small camera tilt
+    assert not np.array_equal(w[combo_index(0, 0, 0)], w[combo_index(0, 1, 0)])
+    skeleton = CrossSamples(split, 64, "skeleton", 10, seed=3).sample(0, 0)
+    assert skeleton["ids"][0, 2] == skeleton["ids"][1, 2]  # no view encoder: one view
+    np.testing.assert_array_equal(skeleton["windows"][combo_index(0, 1, 0)], skeleton["windows"][combo_index(0, 1, 1)])
+
+
+def test_one_training_step_lowers_the_loss():
+    torch.manual_seed(0)
+    split = FakeSplit()
+    config = TrainConfig(augment=AugmentConfig(clip_lengths=(64,), scale_range=(1.0, 1.0), flip_prob=0.0,
+                                               noise_std=0.0, drop_prob=0.0))
+    stats = split_statistics(split, 64, 32, 0)
+    batch = _batch(split)
+    model = RetargetNet()
+    optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=True)
+
+    def loss() -> float:
+        model.eval()
+        with torch.no_grad():
+            inputs, targets = batch_tensors(batch["windows"], batch["ids"], stats, config, torch.Generator(), False)
+            return float(objective(model, inputs, targets, stats, config.loss)["total"])
+
+    before = loss()
+    train_step(model, optimizer, batch, stats, config, torch.Generator().manual_seed(0))
+    assert loss() < before
+
+
+def test_fit_writes_a_checkpoint_the_retargeter_loads(tmp_path, walking_track):
+    split = FakeSplit()
+    summary = fit(split, FakeSplit(seed=1), tmp_path / "r.pt", TINY, epochs=2)
+    assert summary.epochs == 2 and summary.steps == 4 and summary.stopped == "epochs"
+    assert {"train_rec", "train_cross", "train_foot", "train_triplet", "val_total"} <= set(summary.history[-1])
+    loaded = load_checkpoint(tmp_path / "r.pt")
+    assert loaded.training["epoch"] == 2 and loaded.variant == "full"
+    retargeter = load_retargeter(tmp_path / "r.pt")
+    out = retargeter.retarget(walking_track, retargeter.reference_codes(walking_track))
+    assert len(out) == len(walking_track)
+
+
+def _weights(path):
+    return load_checkpoint(path).model.state_dict()
+
+
+def test_resume_continues_exactly(tmp_path):
+    split, val = FakeSplit(), FakeSplit(seed=1)
+    fit(split, val, tmp_path / "whole.pt", TINY, epochs=2)
+    # Stop after the first step (a zero budget), then resume to the end.
+    first = fit(split, val, tmp_path / "parts.pt", TINY, epochs=2, minutes=0.0)
+    assert first.stopped == "time" and first.steps == 1
+    rest = fit(split, val, tmp_path / "parts.pt", TINY, epochs=2, resume=True)
+    assert rest.epochs == 2 and rest.steps == 4
+    whole, parts = _weights(tmp_path / "whole.pt"), _weights(tmp_path / "parts.pt")
+    for key in whole:
+        torch.testing.assert_close(parts[key], whole[key], rtol=0, atol=0)
+
+
+def test_fit_refuses_to_overwrite_or_to_resume_other_settings(tmp_path):
+    split = FakeSplit()
+    fit(split, None, tmp_path / "r.pt", TINY, epochs=1)
+    with pytest.raises(InputError, match="already exists; pass --resume"):
+        fit(split, None, tmp_path / "r.pt", TINY, epochs=1)
+    with pytest.raises(InputError, match="other settings.*batch_size"):
+        fit(split, None, tmp_path / "r.pt", TrainConfig(batch_size=2, samples_per_epoch=8, stats_windows=32),
+            epochs=2, resume=True)
+    with pytest.raises(InputError, match="nothing to resume"):
+        fit(split, None, tmp_path / "none.pt", TINY, epochs=1, resume=True)
+
+
+def test_real_tracks_join_with_self_reconstruction(tmp_path, walking_track):
+    t = np.arange(80)[:, None]
+    joints = np.concatenate([walking_track.joints, walking_track.joints[::-1]])  # 80 frames
+    joints = joints + np.stack([2 * np.sin(t / 7.0), np.zeros_like(t)], -1)[:, :, 0][:, None]
+    real = PoseTrack(joints, np.full(joints.shape[:2], 0.9), 30, (640, 480), "body25")
+    summary = fit(FakeSplit(), None, tmp_path / "r.pt", TINY, real_tracks=[real], epochs=1)
+    assert summary.history[-1]["train_real"] > 0
+
+
+@pytest.mark.parametrize("variant", ["skeleton", "view"])
+def test_two_encoder_variants_train(tmp_path, variant):
+    config = TrainConfig(variant=variant, batch_size=2, samples_per_epoch=2, val_samples=2, stats_windows=16)
+    summary = fit(FakeSplit(), FakeSplit(seed=1), tmp_path / "r.pt", config, epochs=1)
+    assert load_checkpoint(summary.checkpoint).variant == variant
+
+
+def test_config_round_trip_and_validation():
+    config = TrainConfig(variant="skeleton", augment=AugmentConfig(clip_lengths=(64, 32)))
+    assert TrainConfig.from_dict(config.to_dict()) == config
+    with pytest.raises(ValueError, match="unknown network variant"):
+        TrainConfig(variant="huge")
+    with pytest.raises(ValueError, match="window"):
+        TrainConfig(window=32)
+    assert variant_config(TrainConfig().variant).body_code == 16
+
+
+def test_train_on_a_motion_world_built_from_mocap(shared_dir, tmp_path):
+    mocap = tmp_path / "mocap"
+    mocap.mkdir()
+    for name in ("dataset-1/dataset-1_walk_normal_001", "dataset-1/dataset-1_bow_normal_001",
+                 "dataset-2/dataset-2_walk_normal_001", "dataset-2/dataset-2_walk_normal_002"):
+        shutil.copy(shared_dir / "mocap" / "bandai_namco" / f"{name}.bvh.gz", mocap)
+    summary = train(mocap, tmp_path / "r.pt", cache_dir=tmp_path / "cache", config=TINY, device="cpu", epochs=1,
+                    progress=False)
+    assert summary.epochs == 1 and "val_cross" in summary.history[0]
+    assert load_checkpoint(tmp_path / "r.pt").training["epoch"] == 1
