@@ -203,6 +203,7 @@ class WorldSplit:
     """
 
     def __init__(self, name: str, folder: Path, meta: dict, config: WorldConfig) -> None:
+        self._args = (name, Path(folder), meta, config)
         self.name = name
         info = meta["splits"][name]
         self.positions = np.load(folder / f"{name}_positions.npy", mmap_mode="r")
@@ -223,6 +224,10 @@ class WorldSplit:
             )
             for c, s in self._windows
         )
+
+    def __reduce__(self) -> tuple:
+        # Pickle the folder, not the memory-mapped arrays: data-loader workers reopen the same files.
+        return (WorldSplit, self._args)
 
     def __repr__(self) -> str:
         return (f"WorldSplit({self.name!r}, motions={self.num_motions}, characters={self.num_characters}, "

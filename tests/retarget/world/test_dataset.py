@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import pickle
 import shutil
 from pathlib import Path
 
@@ -109,6 +110,14 @@ def test_characters_and_views_change_the_window(tiny_world: MotionWorld) -> None
     assert split.window(0, 0, 6, length=32, offset=16).shape == (32, 15, 2)
     with pytest.raises(IndexError):
         split.window(split.num_motions, 0, 0)
+
+
+def test_split_pickles_by_reference(tiny_world: MotionWorld) -> None:
+    split = tiny_world.split("val")
+    blob = pickle.dumps(split)
+    assert len(blob) < 200_000  # the folder and metadata, not the arrays
+    again = pickle.loads(blob)
+    np.testing.assert_array_equal(again.window(0, 1, 5), split.window(0, 1, 5))
 
 
 def test_second_build_comes_from_the_cache(
