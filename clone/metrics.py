@@ -44,11 +44,12 @@ PCK_ALPHAS = (0.05, 0.1)
 
 @dataclass(frozen=True)
 class MetricInfo:
-    """What one summary number means: its label, unit, which direction is better, and its definition."""
+    """What one summary number means: its label, unit, which direction is better (None: neither, it only
+    describes the motion), and its definition."""
 
     label: str
     unit: str
-    better: Literal["lower", "higher"]
+    better: Literal["lower", "higher"] | None
     meaning: str
     scale: float = 1.0  # multiply by this for display (e.g. MSE in height² shown x 1000)
 
@@ -66,7 +67,7 @@ METRICS: dict[str, MetricInfo] = {
     ),
     "foot_slide_px": MetricInfo("Foot skating (px)", "px / frame", "lower", "foot skating in pixels of the image"),
     "contact_share": MetricInfo(
-        "Ankle contact", "share of ankle-frames", "higher", "share of ankle-frames judged to touch the ground"
+        "Ankle contact", "share of ankle-frames", None, "share of ankle-frames judged to touch the ground"
     ),
     "jitter_pct": MetricInfo(
         "Jitter", "% of height / frame²", "lower",

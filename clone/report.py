@@ -63,7 +63,6 @@ METRICS_VERSION = 1
 
 # One colour per column of the report (driver, then the methods in order, then the ground truth).
 _PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2")
-_LABEL_BAR = 28  # pixels of the caption strip above each panel
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,6 +196,11 @@ def overlay(frame: np.ndarray, joints: np.ndarray | None, layout: str) -> np.nda
     return out
 
 
+def caption_height(height: int) -> int:
+    """Rows of the caption strip above panels ``height`` rows tall."""
+    return max(22, round(0.1 * height))
+
+
 def side_by_side(panels: Sequence[np.ndarray], labels: Sequence[str], height: int) -> np.ndarray:
     """Panels next to each other at one height, each under a caption strip.
 
@@ -210,6 +214,8 @@ def side_by_side(panels: Sequence[np.ndarray], labels: Sequence[str], height: in
     """
     if len(panels) != len(labels) or not panels:
         raise ValueError(f"side_by_side: {len(panels)} panels for {len(labels)} labels")
+    bar_height = caption_height(height)
+    scale = bar_height / 46  # Hershey simplex at 1.0 is ~22 px tall: text fills about half the strip
     columns = []
     for panel, label in zip(panels, labels):
         h, w = panel.shape[:2]
@@ -217,10 +223,9 @@ def side_by_side(panels: Sequence[np.ndarray], labels: Sequence[str], height: in
         if (w, h) != (width, height):
             interp = cv2.INTER_AREA if h > height else cv2.INTER_LINEAR
             panel = cv2.resize(panel, (width, height), interpolation=interp)
-        bar = np.full((_LABEL_BAR, width, 3), 32, dtype=np.uint8)
-        scale = 0.55
+        bar = np.full((bar_height, width, 3), 32, dtype=np.uint8)
         (tw, th), _ = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
-        org = (max(4, (width - tw) // 2), (_LABEL_BAR + th) // 2)
+        org = (max(4, (width - tw) // 2), (bar_height + th) // 2)
         cv2.putText(bar, label, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (235, 235, 235), 1, cv2.LINE_AA)
         columns.append(np.vstack([bar, panel]))
     out = np.hstack(columns)  # [caption + height, sum W_i, 3]
@@ -315,8 +320,11 @@ def _fmt(value: float, scale: float = 1.0) -> str:
 
 
 def best_methods(methods: Mapping[str, MethodResult], key: str) -> set[str]:
-    """The methods with the better value of summary ``key`` (empty when all are equal or none has one)."""
+    """The methods with the better value of summary ``key`` (empty when all are equal, none has one, or the
+    measure has no better direction)."""
     better = METRICS[key].better
+    if better is None:
+        return set()
     values = {n: m.scores.summary.get(key, float("nan")) for n, m in methods.items()}
     values = {n: v for n, v in values.items() if not math.isnan(v)}
     if len(values) < 2 or len(set(values.values())) == 1:
@@ -407,8 +415,8 @@ def plot_summary(path: Path, methods: Mapping[str, MethodResult]) -> list[str]:
             ax.annotate(_fmt(v), (bar.get_x() + bar.get_width() / 2, bar.get_height()), ha="center",
                         va="bottom", fontsize=8)  # fmt: skip
         ax.set_xticks(range(len(names)), [methods[n].label for n in names], fontsize=8)
-        arrow = "↓" if info.better == "lower" else "↑"
-        ax.set_title(f"{info.label} {arrow}", fontsize=9)
+        arrow = {"lower": " ↓", "higher": " ↑", None: ""}[info.better]
+        ax.set_title(f"{info.label}{arrow}", fontsize=9)
         if info.unit:
             ax.set_ylabel(info.unit, fontsize=8)
         ax.tick_params(axis="y", labelsize=8)
@@ -470,8 +478,11 @@ td.best{background:#dff3e2;font-weight:700;color:#12611f}td.base{color:#8a909c}
 .swatch{display:inline-block;width:10px;height:10px;border-radius:2px;margin-right:6px;vertical-align:baseline}
 video,img{display:block;width:100%;height:auto;border-radius:6px;background:#000}
 img.plot{background:#fff}figure{margin:14px 0}figcaption{color:#5a6272;font-size:13px;margin-top:4px}
-.note{color:#5a6272;font-size:13px}ul.defs{padding-left:18px;font-size:14px}ul.defs li{margin:3px 0}
+.note{color:#5a6272;font-size:13px}details{margin-top:12px}summary{cursor:pointer;color:#34405a}ul.defs{padding-left:18px;font-size:14px}ul.defs li{margin:3px 0}
 """
+
+
+_BEST = ' class="best"'  # a table cell holding the better value
 
 
 def _row(cells: Sequence[str]) -> str:
@@ -492,19 +503,40 @@ def _summary_table(methods: Mapping[str, MethodResult], driver: DriverInfo, colo
     for key in keys:
         info = METRICS[key]
         best = best_methods(methods, key)
-        arrow = "lower is better" if info.better == "lower" else "higher is better"
+        arrow = {"lower": "lower is better", "higher": "higher is better", None: "context"}[info.better]
         cells = [
             f'<td title="{html.escape(info.meaning)}">{html.escape(info.label)}</td>',
             f'<td class="unit">{html.escape(" · ".join(filter(None, (info.unit, arrow))))}</td>',
         ]
         for name, m in methods.items():
             v = m.scores.summary.get(key, float("nan"))
-            cls = ' class="best"' if name in best else ""
-            cells.append(f"<td{cls}>{_fmt(v, info.scale)}</td>")
+            cells.append(f"<td{_BEST if name in best else ''}>{_fmt(v, info.scale)}</td>")
         if base is not None:
             cells.append(f'<td class="base">{_fmt(base.summary.get(key, float("nan")), info.scale)}</td>')
         rows.append(_row(cells))
     return "<table>" + "".join(rows) + "</table>"
+
+
+def _limb_table(methods: Mapping[str, MethodResult]) -> str:
+    """Per-limb length error of every method (best per limb highlighted), or "" when none has it."""
+    key = "limb_error_pct_per_limb"
+    per = {n: m.scores.details.get(key) for n, m in methods.items()}
+    per = {n: v for n, v in per.items() if isinstance(v, Mapping)}
+    if not per:
+        return ""
+    limbs = list(next(iter(per.values())))
+    rows = [_row(["<th>Limb</th>", *(f"<th>{html.escape(methods[n].label)}</th>" for n in per)])]
+    for limb in limbs:
+        values = {n: float(v.get(limb, float("nan"))) for n, v in per.items()}
+        finite = [v for v in values.values() if not math.isnan(v)]
+        best = min(finite) if len(set(finite)) > 1 else None
+        cells = [f"<td>{html.escape(limb)}</td>"]
+        cells += [f"<td{_BEST if v == best else ''}>{_fmt(v)}</td>" for v in values.values()]
+        rows.append(_row(cells))
+    return (
+        "<details><summary>Limb-length error per limb (% of height)</summary>"
+        f"<table>{''.join(rows)}</table></details>"
+    )
 
 
 def render_page(
@@ -547,6 +579,7 @@ def render_page(
         "</dl></section>",
         "<section><h2>Summary</h2>",
         _summary_table(methods, driver, colors),
+        _limb_table(methods),
         (
             '<p class="note">The better value of each measure is highlighted. Lengths are in % of the '
             "reference's height (nose-to-ankle bone length). Hover a measure for its definition; all numbers "
@@ -805,7 +838,7 @@ def make_report(
     at = set(still_indices(total))
     stills: dict[str, dict[int, np.ndarray]] = {m: {} for m in driven}
     gt_stills: dict[int, np.ndarray] = {}
-    panel_height = min(canvas.size, 512)
+    panel_height = min(max(canvas.size, 256), 512)  # small canvases are scaled up so captions stay legible
     labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)] + (["Ground truth"] if truth_frames else [])
 
     with report_dir(out_dir, overwrite) as stage:
@@ -855,7 +888,7 @@ def make_report(
                 gt_poses_canvas,
             )
         info = DriverInfo(driver, str(driver_path), str(model_path), _driver_baseline(driver))
-        write_report_files(stage, methods, info, gt_info, VIDEO, still_height=min(canvas.size, 384))
+        write_report_files(stage, methods, info, gt_info, VIDEO)
     summary = {m: dict(r.scores.summary) for m, r in methods.items()}
     return ReportRun(out_dir / PAGE, total, summary, time.perf_counter() - t0)
 

@@ -162,19 +162,25 @@ def test_report_files_numbers_and_page(tmp_path):
     cells = re.findall(r"<td([^>]*)>([^<]*)</td>", row)[1:]
     assert cells[0] == ("", f"{gs['summary']['pose_rmse_pct']:.3g}") and cells[1] == (' class="best"', "0")
     assert re.search(r"PSNR \(frame\)</td>.*?<td class=\"best\">∞</td>", page)
+    # per-limb breakdown: the shifted copy has the same limb lengths, so no limb has a better method
+    limbs = re.search(r"Limb-length error per limb.*?</table>", page).group(0)
+    assert limbs.count("<tr>") == 1 + len(BODY15.limbs) and 'class="best"' not in limbs
 
     for name in stills + ["curves.png", "summary.png"]:
         img = cv2.imread(str(out / name))
         assert img is not None and img.shape[0] > 50
     still = cv2.imread(str(out / stills[0]))
     # driver | 2 methods | ground truth, each scaled to 320 rows under a caption strip
-    assert still.shape[0] == 320 + 28 and still.shape[1] >= 4 * 320 - 1
+    assert still.shape[0] == 320 + report.caption_height(320) and still.shape[1] >= 4 * 320 - 1
 
 
 def test_best_methods_and_formatting():
     methods, _, _ = make_methods(with_frames=False)
     assert report.best_methods(methods, "pose_mse") == {"retarget"}
     assert report.best_methods(methods, "pck_0.1") == set()  # a tie highlights nobody
+    differ = {n: report.MethodResult(m.label, m.poses, metrics.Scores(summary={"contact_share": i / 2}))
+              for i, (n, m) in enumerate(methods.items())}  # fmt: skip
+    assert report.best_methods(differ, "contact_share") == set()  # a description, not a quality
     assert report._fmt(float("inf")) == "∞" and report._fmt(float("nan")) == "–"
     assert report._fmt(0.0123, 1000.0) == "12.3"
 
@@ -183,7 +189,8 @@ def test_side_by_side_and_still_indices():
     a = np.zeros((30, 40, 3), np.uint8)
     b = np.full((61, 61, 3), 255, np.uint8)
     out = report.side_by_side([a, b], ["a", "b"], 61)
-    assert out.shape == (61 + 28 + 1, 81 + 61, 3)  # 40x30 -> 81x61 and 61x61, one row padded to even
+    assert report.caption_height(61) == 22
+    assert out.shape == (61 + 22 + 1, 81 + 61, 3)  # 40x30 -> 81x61 and 61x61, one row padded to even
     assert out.shape[0] % 2 == 0 and out.shape[1] % 2 == 0
     assert report.still_indices(100, 4) == [20, 40, 60, 80]
     assert report.still_indices(2, 4) == [0, 1] and report.still_indices(0) == []
@@ -252,8 +259,8 @@ def test_make_report_end_to_end(tmp_path, tiny_models):
         assert set(summary) == set(metrics.METRICS)  # every measure, ground-truth ones included
         assert 0.0 <= summary["ssim"] <= 1.0 and np.isfinite(summary["psnr"])
     video = read_frames(tmp_path / "rep" / "side_by_side.mp4")
-    # driver (64² scaled to 32²) | global scaling | retargeted | ground truth, each 32² under a caption
-    assert video.num_frames == T and video.size == (4 * 32, 32 + 28)
+    # driver | global scaling | retargeted | ground truth: the 32² canvas shown at 256 rows under a caption
+    assert video.num_frames == T and video.size == (4 * 256, 256 + report.caption_height(256))
     doc = json.loads((tmp_path / "rep" / "metrics.json").read_text())
     assert doc["ground_truth"] == {"poses": str(gt_poses), "frames": str(gt_frames)}
     assert doc["driver_baseline"]["summary"]["limb_error_pct"] >= 0.0
@@ -344,7 +351,8 @@ def test_page_loads_in_chromium(tmp_path):
     assert found, f"the check script did not finish: {dom[-500:]}"
     check = json.loads(found.group(1).replace("&quot;", '"'))
     assert check["images"] == 2 + len(report.still_indices(12, 3)) and check["bad"] == []
-    assert check["videos"] == [{"src": "side_by_side.mp4", "w": 2 * SIZE, "h": SIZE + 28, "error": None}]
+    assert check["videos"] == [{"src": "side_by_side.mp4", "w": 2 * SIZE, "h": SIZE + report.caption_height(SIZE),
+                                  "error": None}]  # fmt: skip
     shot = tmp_path / "shot.png"
     subprocess.run([*args, f"--screenshot={shot}", (out / "report.html").as_uri()], capture_output=True, check=False,
                    timeout=120)  # fmt: skip
