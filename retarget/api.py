@@ -13,9 +13,10 @@ stands and with the feet on the reference's ground line.
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 import torch
@@ -26,10 +27,10 @@ from pose_io.track import PoseTrack
 from retarget.checkpoint import RetargetWeights, load_weights
 from retarget.model import RetargetNet
 from retarget.preprocess import (
-    LAYOUT,
     NormStats,
     Placement,
     PreprocessConfig,
+    body15_track,
     canvas_scale,
     channels_to_joints,
     joints_to_channels,
@@ -104,7 +105,7 @@ class ReferenceCodes:
         return out
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> "ReferenceCodes":
+    def from_dict(cls, data: Mapping[str, Any]) -> ReferenceCodes:
         """Inverse of :meth:`to_dict` (values may be numpy arrays, tensors or lists).
 
         Raises:
@@ -221,13 +222,7 @@ class Retargeter:
         joints = channels_to_joints(y.double().cpu(), self.stats)[0].numpy()  # [T, 15, 2] canvas
         joints = joints / canvas_scale(reference.image_size, self.preprocess)  # reference pixels
         joints = place(smooth(joints, self.preprocess.output_sigma), reference.placement)
-        return PoseTrack(
-            joints.astype(np.float32),
-            np.ones(joints.shape[:2], dtype=np.float32),
-            motion.fps,
-            reference.image_size,
-            LAYOUT.name,
-        )
+        return body15_track(joints, motion.fps, reference.image_size)
 
     def _check_reference(self, reference: ReferenceCodes) -> None:
         for name, code, dim in (

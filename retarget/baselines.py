@@ -17,14 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.preprocess import (
     LAYOUT,
     ROOT,
     ROOT_INDEX,
+    body15_track,
+    filled_body15,
     ground_heights,
-    hold_fill,
     place,
     placement_of,
     pose_heights,
@@ -32,25 +32,9 @@ from retarget.preprocess import (
 )
 
 
-def _clean(track: PoseTrack, name: str) -> np.ndarray:
-    """[T, 15, 2] float64 body15 joints with gaps filled."""
-    joints = to_body15(track, name).joints.astype(np.float64)
-    seen = ~np.isnan(joints[..., 0])
-    if not seen.any(axis=0).all():
-        never = [LAYOUT.joints[j] for j in np.flatnonzero(~seen.any(axis=0))]
-        raise InputError(f"{name}: joints never detected in any frame: {', '.join(never)}")
-    return hold_fill(joints)
-
-
 def _output(joints: np.ndarray, motion: PoseTrack, reference: PoseTrack) -> PoseTrack:
     placed = place(joints, placement_of(to_body15(reference, "reference track").joints, "reference track"))
-    return PoseTrack(
-        placed.astype(np.float32),
-        np.ones(placed.shape[:2], dtype=np.float32),
-        motion.fps,
-        reference.image_size,
-        LAYOUT.name,
-    )
+    return body15_track(placed, motion.fps, reference.image_size)
 
 
 def _depth_profile(joints: np.ndarray, near_fraction: float) -> tuple[float, float, float, float]:
@@ -87,8 +71,8 @@ def global_scale_retarget(
     Returns:
         body15 track, ``len(motion)`` frames, in the reference's pixels.
     """
-    drv = _clean(motion, "motion track")
-    ref = _clean(reference, "reference track")
+    drv = filled_body15(motion, "motion track")
+    ref = filled_body15(reference, "reference track")
     far_d, near_d, hf_d, hn_d = _depth_profile(drv, near_fraction)
     far_r, near_r, hf_r, hn_r = _depth_profile(ref, near_fraction)
     ankle = ground_heights(drv)  # [T]
@@ -134,8 +118,8 @@ def limb_scale_retarget(motion: PoseTrack, reference: PoseTrack, length_quantile
     Returns:
         body15 track, ``len(motion)`` frames, in the reference's pixels.
     """
-    drv = _clean(motion, "motion track")
-    ref = _clean(reference, "reference track")
+    drv = filled_body15(motion, "motion track")
+    ref = filled_body15(reference, "reference track")
     len_d = limb_lengths(drv, length_quantile)
     len_r = limb_lengths(ref, length_quantile)
     ratio = len_r / np.maximum(len_d, 1e-6)  # [L]

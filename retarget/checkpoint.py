@@ -86,7 +86,7 @@ def save_checkpoint(
     path: str | Path,
     model: nn.Module,
     stats: NormStats,
-    preprocess: PreprocessConfig = PreprocessConfig(),
+    preprocess: PreprocessConfig | None = None,
     training: dict[str, Any] | None = None,
 ) -> Path:
     """Write a checkpoint atomically (temp file + rename), replacing ``path``.
@@ -95,7 +95,7 @@ def save_checkpoint(
         path: output file.
         model: a :class:`RetargetNet`, possibly wrapped.
         stats: its input statistics.
-        preprocess: its canvas and smoothing settings.
+        preprocess: its canvas and smoothing settings (default: the authors').
         training: optional resume state (plain values and tensors only).
 
     Returns:
@@ -110,7 +110,7 @@ def save_checkpoint(
         "variant": net.variant,
         "layout": LAYOUT.name,
         "config": net.config.to_dict(),
-        "preprocess": dataclasses.asdict(preprocess),
+        "preprocess": dataclasses.asdict(preprocess or PreprocessConfig()),
         "state_dict": {k: v.detach().cpu().clone() for k, v in net.state_dict().items()},
         "stats": {"mean": torch.tensor(stats.mean), "std": torch.tensor(stats.std)},
     }

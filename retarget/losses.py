@@ -140,15 +140,15 @@ def _triplet(
     """For each code and each triple t: the code of the window sharing only that factor with triple t
     (anchor) should be nearer to triple t's code (positive) than to the other triple's (negative)."""
     total = inputs.new_zeros(())
-    for factor in triple:
+    for factor, codes in triple.items():
         anchors = []
         for t in (0, 1):
             combo = [1 - t] * 3
             combo[factor] = t
             anchors.append(inputs[:, combo_index(*combo)])
         anchor = _codes(model, torch.cat(anchors))[factor].flatten(1)  # [2B, D]
-        own = triple[factor].flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
-        other = triple[factor].flip(0).flatten(2).flatten(0, 1)
+        own = codes.flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
+        other = codes.flip(0).flatten(2).flatten(0, 1)
         total = total + 2 * F.triplet_margin_loss(anchor, own, other, margin=margin)
     return total
 

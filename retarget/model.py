@@ -15,8 +15,10 @@ The two-encoder variants of the authors' release drop one static encoder and its
 from __future__ import annotations
 
 import dataclasses
+import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import torch
 import torch.nn.functional as F
@@ -91,7 +93,7 @@ class NetworkConfig:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(self).items()}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "NetworkConfig":
+    def from_dict(cls, data: dict[str, Any]) -> NetworkConfig:
         """Inverse of :meth:`to_dict`; unknown keys raise ValueError."""
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = set(data) - names
@@ -136,7 +138,7 @@ class MotionEncoder(nn.Module):
         self.pad = (kernel - 2) // 2
         self.slope = negative_slope
         self.layers = nn.ModuleList(
-            nn.Conv1d(c_in, c_out, kernel, stride=2) for c_in, c_out in zip(channels[:-1], channels[1:])
+            nn.Conv1d(c_in, c_out, kernel, stride=2) for c_in, c_out in itertools.pairwise(channels)
         )
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -166,7 +168,7 @@ class StaticEncoder(nn.Module):
         self.slope = negative_slope
         self.pool, self.global_pool = _POOLS[pool]
         self.layers = nn.ModuleList(
-            nn.Conv1d(c_in, c_out, kernel) for c_in, c_out in zip(channels[:-1], channels[1:])
+            nn.Conv1d(c_in, c_out, kernel) for c_in, c_out in itertools.pairwise(channels)
         )
         self.compress = nn.Conv1d(channels[-1], code, 1) if code is not None else nn.Identity()
 
@@ -185,7 +187,7 @@ class Decoder(nn.Module):
         self.slope = negative_slope
         self.dropout = nn.Dropout(dropout)
         self.layers = nn.ModuleList(
-            nn.Conv1d(c_in, c_out, kernel) for c_in, c_out in zip(channels[:-1], channels[1:])
+            nn.Conv1d(c_in, c_out, kernel) for c_in, c_out in itertools.pairwise(channels)
         )
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import contextlib
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Iterator
 
 import numpy as np
 import torch
@@ -211,10 +211,33 @@ def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig) -> float
     return config.canvas_height / float(image_size[1])
 
 
+def filled_body15(track: PoseTrack, name: str = "track") -> np.ndarray:
+    """A track in body15 with every gap filled (:func:`hold_fill`), in its own pixels.
+
+    Args:
+        track: any layout that can give body15.
+        name: how error messages call the track.
+
+    Returns:
+        [T, 15, 2] float64.
+
+    Raises:
+        InputError: layout not convertible, no joint detected at all, or a joint never detected.
+    """
+    joints = to_body15(track, name).joints.astype(np.float64)
+    seen = ~np.isnan(joints[..., 0])
+    if not seen.any():
+        raise InputError(f"{name}: no joints detected in any of its {len(track)} frames")
+    never = [LAYOUT.joints[j] for j in np.flatnonzero(~seen.any(axis=0))]
+    if never:
+        raise InputError(f"{name}: joints never detected in any frame: {', '.join(never)}")
+    return hold_fill(joints)
+
+
 def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> np.ndarray:
     """A real track as clean body15 poses in the network canvas (the authors' preprocessing).
 
-    Converts to body15, fills gaps (:func:`hold_fill`), smooths over time and scales by
+    Converts to body15, fills gaps (:func:`filled_body15`), smooths over time and scales by
     ``canvas_height / image_height``.
 
     Args:
@@ -226,17 +249,17 @@ def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track
         [T, 15, 2] float64 canvas coordinates.
 
     Raises:
-        InputError: layout not convertible, no joint detected at all, or a joint never detected.
+        InputError: see :func:`filled_body15`.
     """
-    body = to_body15(track, name)
-    joints = body.joints.astype(np.float64)
-    seen = ~np.isnan(joints[..., 0])
-    if not seen.any():
-        raise InputError(f"{name}: no joints detected in any of its {len(body)} frames")
-    never = [LAYOUT.joints[j] for j in np.flatnonzero(~seen.any(axis=0))]
-    if never:
-        raise InputError(f"{name}: joints never detected in any frame: {', '.join(never)}")
-    return smooth(hold_fill(joints), config.input_sigma) * canvas_scale(body.image_size, config)
+    filled = filled_body15(track, name)
+    return smooth(filled, config.input_sigma) * canvas_scale(track.image_size, config)
+
+
+def body15_track(joints: np.ndarray, fps: float, image_size: tuple[int, int]) -> PoseTrack:
+    """A synthesised body15 track: [T, 15, 2] pixels, every joint present (confidence 1)."""
+    return PoseTrack(
+        joints.astype(np.float32), np.ones(joints.shape[:2], dtype=np.float32), fps, image_size, LAYOUT.name
+    )
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -14,13 +14,15 @@ The split interface used here (the motion world provides it)::
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import math
 import time
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Protocol, Sequence
+from typing import Any, Protocol
 
 import numpy as np
 import torch
@@ -87,9 +89,9 @@ class TrainConfig:
     real_batch_size: int = 16
     real_weight: float = 1.0
     seed: int = 0
-    augment: AugmentConfig = AugmentConfig()
-    loss: LossConfig = LossConfig()
-    preprocess: PreprocessConfig = PreprocessConfig()
+    augment: AugmentConfig = field(default_factory=AugmentConfig)
+    loss: LossConfig = field(default_factory=LossConfig)
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -108,7 +110,7 @@ class TrainConfig:
         return plain(dataclasses.asdict(self))
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "TrainConfig":
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
         """Inverse of :meth:`to_dict`."""
         nested = {"augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig}
         values = dict(data)
@@ -510,22 +512,18 @@ def _format(losses: dict[str, float], prefix: str = "") -> str:
 
 
 class _NoBar:
+    """Stands in for a rich Progress when no bar is wanted."""
+
     def add_task(self, *args: Any, **kwargs: Any) -> int:
         return 0
 
     def update(self, *args: Any, **kwargs: Any) -> None:
         return None
 
-    def __enter__(self) -> "_NoBar":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
 
 def _progress_bar(enabled: bool) -> Any:
     if not enabled:
-        return _NoBar()
+        return contextlib.nullcontext(_NoBar())
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -546,6 +544,7 @@ def train(
     epochs: int | None = None,
     minutes: float | None = None,
     resume: bool = False,
+    num_workers: int = 0,
     progress: bool = True,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
@@ -553,13 +552,14 @@ def train(
     Args:
         mocap_dir: motion-capture folder the world is built from.
         out: checkpoint file.
-        cache_dir: where the world is cached; default ``<out>.world-cache`` next to the checkpoint.
+        cache_dir: where the world is cached (default: the world's, ``~/.cache/clone2d/world``).
         real_dir: optional folder of OpenPose folders (unlabelled real tracks).
         config: training settings.
         device: "auto", "cpu", "cuda" or "cuda:N".
         epochs: total epochs (see :func:`fit`).
         minutes: time budget of this call.
         resume: continue the run in ``out``.
+        num_workers: data-loader worker processes (cutting world windows overlaps the network's work).
         progress: show a progress bar.
     """
     from retarget.world import MotionWorld
@@ -574,9 +574,8 @@ def train(
     except ValueError as exc:
         raise InputError(str(exc)) from None
     real = read_real_tracks(real_dir) if real_dir is not None else []
-    cache = Path(cache_dir) if cache_dir is not None else out.with_name(out.name + ".world-cache")
-    world = MotionWorld.build(mocap_dir, cache, seed=config.seed)
+    world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
     return fit(
         world.split("train"), world.split("val"), out, config, dev, real, epochs, minutes, resume,
-        progress=progress,
+        num_workers=num_workers, progress=progress,
     )

@@ -6,11 +6,11 @@ torch and the pose readers are imported inside the commands so that `clone --hel
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, device_option, user_errors
+from clone.cli.common import console, user_errors
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -18,22 +18,28 @@ retarget_app = typer.Typer(
 )
 
 _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
+_DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 
 
 @retarget_app.command("apply")
 @user_errors
 def apply(
-    motion_poses: Path = typer.Argument(..., help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv)."),
-    skeleton: Path = typer.Option(..., "--skeleton", help="Reference person's poses: skeleton, placement, frame."),
-    view: Optional[Path] = typer.Option(None, "--view", help="Poses whose camera view to use (default: --skeleton's)."),
-    out: Path = typer.Option(..., "--out", help="Output: a folder (OpenPose JSON), or a .npz / .csv file."),
-    preview: Optional[Path] = typer.Option(None, "--preview", help="Also draw the result into this .mp4."),
-    weights: Optional[Path] = typer.Option(
-        None, "--weights", help="clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped weights)."
-    ),
-    size: Optional[str] = typer.Option(None, "--size", help=_SIZE_HELP),
-    device: str = device_option(),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
+    motion_poses: Annotated[
+        Path, typer.Argument(help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv).")
+    ],
+    skeleton: Annotated[Path, typer.Option("--skeleton", help="Reference person's poses: skeleton, placement, frame.")],
+    out: Annotated[Path, typer.Option("--out", help="Output: a folder (OpenPose JSON), or a .npz / .csv file.")],
+    view: Annotated[
+        Path | None, typer.Option("--view", help="Poses whose camera view to use (default: --skeleton's).")
+    ] = None,
+    preview: Annotated[Path | None, typer.Option("--preview", help="Also draw the result into this .mp4.")] = None,
+    weights: Annotated[
+        Path | None,
+        typer.Option("--weights", help="clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped)."),
+    ] = None,
+    size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
+    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
     from pose_io.atomic import check_new_output
@@ -65,18 +71,29 @@ def apply(
 @retarget_app.command("train")
 @user_errors
 def train(
-    mocap: Path = typer.Option(..., "--mocap", help="Motion-capture folder the synthetic world is built from."),
-    out: Path = typer.Option(..., "--out", help="Checkpoint file to write (rewritten after every epoch)."),
-    real: Optional[Path] = typer.Option(None, "--real", help="Folder of OpenPose folders: unlabelled real tracks."),
-    minutes: Optional[float] = typer.Option(None, "--minutes", min=0.0, help="Wall-clock budget of this run."),
-    epochs: Optional[int] = typer.Option(None, "--epochs", min=1, help="Total epochs (default 300 without --minutes)."),
-    resume: bool = typer.Option(False, "--resume", help="Continue the run stored in --out."),
-    variant: str = typer.Option("full", "--variant", help="Network: full | skeleton | view."),
-    ablation: str = typer.Option("full", "--ablation", help="Objective: full | no-triplet | recon-triplet."),
-    cache: Optional[Path] = typer.Option(None, "--cache", help="World cache folder (default: <out>.world-cache)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of every random choice."),
-    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: the free cores)."),
-    device: str = device_option(),
+    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the synthetic world is built from.")],
+    out: Annotated[Path, typer.Option("--out", help="Checkpoint file to write (rewritten after every epoch).")],
+    real: Annotated[
+        Path | None, typer.Option("--real", help="Folder of OpenPose folders: unlabelled real tracks.")
+    ] = None,
+    minutes: Annotated[float | None, typer.Option("--minutes", min=0.0, help="Wall-clock budget of this run.")] = None,
+    epochs: Annotated[
+        int | None, typer.Option("--epochs", min=1, help="Total epochs (default 300 without --minutes).")
+    ] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue the run stored in --out.")] = False,
+    variant: Annotated[str, typer.Option("--variant", help="Network: full | skeleton | view.")] = "full",
+    ablation: Annotated[
+        str, typer.Option("--ablation", help="Objective: full | no-triplet | recon-triplet.")
+    ] = "full",
+    cache: Annotated[
+        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
+    threads: Annotated[
+        int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")
+    ] = None,
+    workers: Annotated[int, typer.Option("--workers", min=0, help="Data-loader processes cutting world windows.")] = 0,
+    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
 ) -> None:
     """Train the retargeting network on the motion world built from --mocap."""
     from pose_io.errors import InputError
@@ -92,7 +109,7 @@ def train(
     configure_threads(threads)
     summary = run_training(
         mocap, out, cache_dir=cache, real_dir=real, config=config, device=device, epochs=epochs,
-        minutes=minutes, resume=resume,
+        minutes=minutes, resume=resume, num_workers=workers,
     )
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
     console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")

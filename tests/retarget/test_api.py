@@ -58,7 +58,7 @@ def test_long_tracks_in_windows_match_one_pass(retargeter, clips):
     a = windowed.retarget(track, reference).joints
     b = one_pass.retarget(track, reference).joints
     assert len(a) == 700
-    rel = lambda j: j - j[:, 8:9]  # noqa: E731  root-relative pose
+    rel = lambda j: j - j[:, 8:9]
     height = np.median(pose_heights(b))
     assert np.abs(rel(a) - rel(b)).mean() < 0.002 * height
     assert np.abs(np.diff(a, axis=0)).max() < 1.2 * np.abs(np.diff(b, axis=0)).max()  # no jumps where windows meet

@@ -4,7 +4,7 @@ import torch
 import torch.nn.functional as F
 
 from retarget.augment import combo_index
-from retarget.losses import ABLATIONS, LossConfig, ablation_config, foot_velocity, objective, used_combos
+from retarget.losses import LossConfig, ablation_config, foot_velocity, objective, used_combos
 from retarget.model import RetargetNet, variant_config
 from retarget.preprocess import LAYOUT, NormStats, joints_to_channels
 

@@ -4,8 +4,22 @@ import torch
 
 from pose_io.readers import read_track
 from retarget.checkpoint import load_official
-from retarget.model import VARIANTS, NetworkConfig, RetargetNet, map_official_state_dict, min_frames, variant_config
-from retarget.preprocess import NormStats, PreprocessConfig, channels_to_joints, joints_to_channels, prepare_track, smooth
+from retarget.model import (
+    VARIANTS,
+    NetworkConfig,
+    RetargetNet,
+    map_official_state_dict,
+    min_frames,
+    variant_config,
+)
+from retarget.preprocess import (
+    NormStats,
+    PreprocessConfig,
+    channels_to_joints,
+    joints_to_channels,
+    prepare_track,
+    smooth,
+)
 
 CLIPS = ("tall_man", "small_man")
 

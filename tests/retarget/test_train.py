@@ -44,8 +44,8 @@ class FakeSplit:
         rng = np.random.default_rng(seed)
         self.num_motions, self.num_characters, self.num_views = motions, characters, views
         self.motions = [
-            dict(amp=rng.uniform(0.2, 0.9), freq=rng.uniform(0.05, 0.2), phase=rng.uniform(0, 6),
-                 speed=rng.uniform(-0.02, 0.02))
+            {"amp": rng.uniform(0.2, 0.9), "freq": rng.uniform(0.05, 0.2), "phase": rng.uniform(0, 6),
+             "speed": rng.uniform(-0.02, 0.02)}
             for _ in range(motions)
         ]
         self.characters = [{n: rng.uniform(0.8, 1.25) for n in _PARENT} for _ in range(characters)]
