@@ -210,7 +210,8 @@ class Retargeter:
 
         Returns:
             body15 track with ``len(motion)`` frames, the driver's fps and the reference's image size;
-            every joint present (confidence 1).
+            every joint present (confidence 1). Its size comes from the skeleton code; a network without
+            a skeleton encoder keeps the driver's skeleton at the share of the frame height it had.
 
         Raises:
             InputError: too short a track, a layout that cannot give body15, no joints at all or a joint

@@ -198,3 +198,16 @@ def test_train_on_a_motion_world_built_from_mocap(shared_dir, tmp_path):
                     progress=False)
     assert summary.epochs == 1 and "val_cross" in summary.history[0]
     assert load_checkpoint(tmp_path / "r.pt").training["epoch"] == 1
+
+
+def test_real_tracks_are_read_from_openpose_folders(shared_dir, tmp_path):
+    from retarget.train import read_real_tracks
+
+    for clip in ("tall_man", "small_man"):
+        shutil.copytree(shared_dir / "openpose_examples" / clip, tmp_path / "real" / clip)
+    tracks = read_real_tracks(tmp_path / "real")
+    assert [len(t) for t in tracks] == [121, 135]  # sorted by folder name
+    assert len(read_real_tracks(tmp_path / "real" / "tall_man")) == 1
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="no OpenPose folders"):
+        read_real_tracks(tmp_path / "empty")
