@@ -65,7 +65,7 @@ class Canvas:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Canvas":
+    def from_dict(cls, d: dict) -> Canvas:
         return cls(
             x0=int(d["x0"]), y0=int(d["y0"]), side=int(d["side"]), size=int(d["size"]),
             image_size=tuple(d["image_size"]), mode=str(d.get("mode", "crop")),
@@ -141,12 +141,12 @@ def crop_canvas(
     height = float(np.median(heights)) if len(heights) else float(hi[1] - lo[1])
     pad = margin * max(height, 1.0)
     lo, hi = lo - pad, hi + pad
-    side = int(math.ceil(max(hi[0] - lo[0], hi[1] - lo[1], 1.0)))
+    side = math.ceil(max(hi[0] - lo[0], hi[1] - lo[1], 1.0))
     if side >= max(w, h):
         return full_frame_canvas((w, h), size)
     cx, cy = (lo + hi) / 2.0
-    x0 = int(round(cx - side / 2.0))
-    y0 = int(round(cy - side / 2.0))
+    x0 = round(float(cx) - side / 2.0)
+    y0 = round(float(cy) - side / 2.0)
     # Inside the frame where the square fits in that direction; centred on the frame where it does not.
     x0 = min(max(x0, 0), w - side) if side <= w else (w - side) // 2
     y0 = min(max(y0, 0), h - side) if side <= h else (h - side) // 2

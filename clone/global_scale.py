@@ -49,7 +49,7 @@ class ScaleStats:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, d: dict) -> "ScaleStats":
+    def from_dict(cls, d: dict) -> ScaleStats:
         return cls(**{k: float(d[k]) for k in ("foot_far", "foot_close", "height_far", "height_close", "center_x")})
 
 

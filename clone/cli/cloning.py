@@ -9,17 +9,17 @@ torch and the video libraries are imported inside the commands so that `clone --
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, device_option, user_errors
+from clone.cli.common import console, user_errors
 
 DEFAULT_MODEL = Path("ref_model.pt")
 DEFAULT_SIZE = 128
 
 
-def _device(spec: str, threads: Optional[int]):  # -> torch.device
+def _device(spec: str, threads: int | None):  # -> torch.device
     """Resolve --device (InputError on a bad one); on CPU set the torch thread count."""
     from pose_io.errors import InputError
     from retarget.runtime import configure_threads, resolve_device
@@ -35,32 +35,32 @@ def _device(spec: str, threads: Optional[int]):  # -> torch.device
 
 @user_errors
 def train_ref(
-    ref_poses: Path = typer.Argument(..., help="The reference's poses: any track `clone pose` reads."),
-    frames: Path = typer.Argument(..., help="The reference's frames: a video or a folder of images."),
-    out: Path = typer.Option(DEFAULT_MODEL, "--out", "-o", help="Reference model to write."),
-    size: Optional[int] = typer.Option(
-        None, "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from 32). Default {DEFAULT_SIZE}."
-    ),
-    steps: Optional[int] = typer.Option(
-        None, "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes)."
-    ),
-    minutes: Optional[float] = typer.Option(None, "--minutes", help="Stop after this many minutes."),
-    batch_size: int = typer.Option(1, "--batch-size", min=1, help="Samples per step."),
-    canvas: str = typer.Option("crop", "--canvas", help="crop (around the performer) | full (letterboxed frame)."),
-    device: str = device_option(),
-    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: free cores)."),
-    resume: bool = typer.Option(False, "--resume", help="Continue training the model at --out."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing model at --out."),
-    align: str = typer.Option("exact", "--align", help="exact: frame and pose counts must agree | trim."),
-    weights: Optional[Path] = typer.Option(
-        None, "--weights", help="Retargeting weights for the reference's codes (default: the shipped ones)."
-    ),
+    ref_poses: Annotated[Path, typer.Argument(help="The reference's poses: any track `clone pose` reads.")],
+    frames: Annotated[Path, typer.Argument(help="The reference's frames: a video or a folder of images.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Reference model to write.")] = DEFAULT_MODEL,
+    size: Annotated[int | None, typer.Option(
+        "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from 32). Default {DEFAULT_SIZE}.")] = None,
+    steps: Annotated[int | None, typer.Option(
+        "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes).")] = None,
+    minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
+    batch_size: Annotated[int, typer.Option("--batch-size", min=1, help="Samples per step.")] = 1,
+    canvas: Annotated[str, typer.Option(
+        "--canvas", help="crop (around the performer) | full (letterboxed frame).")] = "crop",
+    device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue training the model at --out.")] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing model at --out.")] = False,
+    align: Annotated[str, typer.Option("--align", help="exact: frame and pose counts must agree | trim.")] = "exact",
+    weights: Annotated[Path | None, typer.Option(
+        "--weights", help="Retargeting weights for the reference's codes (default: the shipped ones).")] = None,
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
-    Writes ONE model file (default ./ref_model.pt, where `clone drive` looks), a .state file next to it for
-    --resume, and a preview image (pose | generated | real) that is refreshed while training. An existing
-    model is never replaced unless --resume or --overwrite is given.
+    Writes ONE model (default ./ref_model.pt, where `clone drive` looks for it).
+
+    Beside it: a .state file for --resume and a preview image (pose | generated | real).
+
+    An existing model is never replaced unless --resume or --overwrite is given.
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
@@ -89,6 +89,9 @@ def train_ref(
         task = bar.add_task("train", total=None, info="reading frames")
 
         def update(p: TrainProgress) -> None:
+            if p.phase == "reading":
+                bar.update(task, completed=p.step, total=p.total, info=f"reading frames {p.step}/{p.total}")
+                return
             losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
             info = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
             if p.total is not None:
@@ -110,23 +113,22 @@ def train_ref(
 
 @user_errors
 def drive(
-    drive_poses: Path = typer.Argument(..., help="The driver's poses: any track `clone pose` reads."),
-    out: Path = typer.Option(..., "--out", "-o", help="Video to write (.mp4, H.264)."),
-    model: Path = typer.Option(DEFAULT_MODEL, "--model", "-m", help="Reference model from `clone train-ref`."),
-    method: str = typer.Option(
-        "retarget", "--method", help="retarget (network) | global-scale (Everybody Dance Now) | none."
-    ),
-    poses_out: Optional[Path] = typer.Option(
-        None, "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv."
-    ),
-    side_by_side: bool = typer.Option(
-        False, "--side-by-side", help="Frames show driver skeleton | driven skeleton | result."
-    ),
-    device: str = device_option(),
-    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads (default: free cores)."),
-    weights: Optional[Path] = typer.Option(None, "--weights", help="Retargeting weights (default: shipped)."),
-    max_gap: int = typer.Option(5, "--max-gap", min=0, help="Fill gaps of up to this many frames in the driver."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
+    drive_poses: Annotated[Path, typer.Argument(help="The driver's poses: any track `clone pose` reads.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Video to write (.mp4, H.264).")],
+    model: Annotated[Path, typer.Option(
+        "--model", "-m", help="Reference model from `clone train-ref`.")] = DEFAULT_MODEL,
+    method: Annotated[str, typer.Option(
+        "--method", help="retarget (network) | global-scale (Everybody Dance Now) | none.")] = "retarget",
+    poses_out: Annotated[Path | None, typer.Option(
+        "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv.")] = None,
+    side_by_side: Annotated[bool, typer.Option(
+        "--side-by-side", help="Frames show driver skeleton | driven skeleton | result.")] = False,
+    device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
+    weights: Annotated[Path | None, typer.Option("--weights", help="Retargeting weights (default: shipped).")] = None,
+    max_gap: Annotated[int, typer.Option(
+        "--max-gap", min=0, help="Fill gaps of up to this many frames in the driver.")] = 5,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
 ) -> None:
     """Make a video of the reference performing the driver's motion."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn

@@ -16,7 +16,13 @@ from clone.reference_model import load_reference_model
 from pose_io.readers import read_track
 from pose_io.writers import write_track
 from retarget.api import PACKAGED_WEIGHTS
-from tests.clone.test_train_ref import OFFICIAL_WEIGHTS, figure_track, one_line_error, train_args, write_reference
+from tests.clone.test_train_ref import (
+    OFFICIAL_WEIGHTS,
+    figure_track,
+    one_line_error,
+    train_args,
+    write_reference,
+)
 
 
 @pytest.fixture(autouse=True)

@@ -36,9 +36,10 @@ def test_generator_shapes_and_range():
     assert y.abs().max() <= 1.0
 
 
+@pytest.mark.parametrize("upsample", ["transpose", "nearest"])
 @pytest.mark.parametrize("depth", [1, 2, 5])
-def test_generator_depths(depth):
-    g = UNetGenerator(GeneratorConfig(base_channels=4, depth=depth, max_channels=16))
+def test_generator_depths_and_upsamplers(depth, upsample):
+    g = UNetGenerator(GeneratorConfig(base_channels=4, depth=depth, max_channels=16, upsample=upsample))
     size = GeneratorConfig(depth=depth).min_size()
     assert g(torch.zeros(1, 6, size, size)).shape == (1, 3, size, size)
 
@@ -84,6 +85,8 @@ def test_config_round_trip_and_validation():
     assert DiscriminatorConfig.from_dict(DiscriminatorConfig().to_dict()) == DiscriminatorConfig()
     with pytest.raises(ValueError):
         GeneratorConfig(depth=0)
+    with pytest.raises(ValueError, match="valid: nearest, transpose"):
+        GeneratorConfig(upsample="bicubic")
     assert default_depth(128) == 5 and default_depth(32) == 3 and default_depth(512) == 7
     for bad in (100, 8, 0):
         with pytest.raises(ValueError, match="power of two"):

@@ -54,11 +54,11 @@ def render_figure(track: PoseTrack) -> list[np.ndarray]:
     yy, xx = np.mgrid[0:h, 0:w]
     background = np.stack([80 + 0 * xx, 120 + 40 * yy // h, 100 + 20 * ((xx // 6 + yy // 6) % 2)], -1)
     frames = []
-    for p in track.joints:
+    for pose in track.joints:
         img = background.astype(np.uint8)
 
-        def at(name: str) -> tuple[int, int]:
-            return tuple(int(round(v)) for v in p[BODY15.index(name)])
+        def at(name: str, p: np.ndarray = pose) -> tuple[int, int]:
+            return tuple(round(float(v)) for v in p[BODY15.index(name)])
 
         torso = np.array([at("r_shoulder"), at("l_shoulder"), at("l_hip"), at("r_hip")], np.int32)
         cv2.fillConvexPoly(img, torso, (220, 180, 40))
@@ -245,6 +245,28 @@ def test_previous_frame_is_zeros_without_one_and_when_dropped():
     assert torch.equal(out[1], torch.zeros(3, 8, 8))
     assert (out[0] - prev[0]).abs().mean() < 0.3 and not torch.equal(out[0], prev[0])
     assert degrade_previous(prev, has, AugmentConfig(), dropout=1.0, generator=gen).abs().max() == 0
+
+
+@pytest.mark.parametrize("source", ["real", "generated"])
+def test_previous_input_sources(source):
+    torch.manual_seed(0)
+    config = TrainConfig(size=32, base_channels=8, disc_channels=8, prev_source=source, prev_dropout=0.0,
+                         augment=AugmentConfig(prev_jitter=0.0, prev_noise=0.0))
+    trainer = Trainer(config, torch.device("cpu"))
+    x = torch.rand(3, 3, 32, 32) * 2 - 1
+    sample = {"pose_prev": x.flip(0), "pose_cur": x, "frame_prev": x, "frame_cur": x,
+              "has_prev": torch.tensor([True, True, False])}
+    g_in, d_prev = trainer.previous_input(sample, torch.Generator().manual_seed(0))
+    assert torch.equal(g_in[2], torch.zeros(3, 32, 32)) and torch.equal(d_prev[2], torch.zeros(3, 32, 32))
+    if source == "real":
+        torch.testing.assert_close(g_in[:2], x[:2])
+    else:  # G's own frame for t-1, made from its pose map and no previous frame
+        with torch.no_grad():
+            expected = trainer.generate(sample["pose_prev"][:2], torch.zeros(2, 3, 32, 32))
+        torch.testing.assert_close(d_prev[:2], expected)
+        torch.testing.assert_close(g_in[:2], expected)
+    losses = trainer.train_step(sample, g_in, d_prev)
+    assert set(losses) == {"l1", "gan", "fm", "d"} and all(np.isfinite(v) for v in losses.values())
 
 
 def test_trainer_steps_lower_l1_on_a_fixed_batch():
