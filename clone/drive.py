@@ -68,18 +68,18 @@ def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
 
 
 def retargeting_weights(model: ReferenceModel, weights: str | os.PathLike | None) -> Path:
-    """The weights file to retarget with: ``weights``, else the shipped ones, else the file the model's codes
-    came from (when it is still there, unchanged)."""
+    """The weights file to retarget with: ``weights``; else the file the model's codes came from, when it is
+    still there unchanged (a model trained with ``--weights X`` keeps using X); else the shipped weights."""
     from retarget.api import PACKAGED_WEIGHTS
 
     if weights is not None:
         return Path(weights)
-    if PACKAGED_WEIGHTS.is_file():
-        return PACKAGED_WEIGHTS
     hint = Path(model.codes_weights_path) if model.codes_weights_path else None
     if hint is not None and hint.is_file() and file_sha256(hint) == model.codes_weights:
         log.info("retargeting with %s, the weights the model's codes came from", hint)
         return hint
+    if PACKAGED_WEIGHTS.is_file():
+        return PACKAGED_WEIGHTS
     if model.reference_codes is None:
         raise InputError("this reference model holds no retargeting codes (it was trained without retargeting "
                          "weights) and none are shipped; pass --weights FILE or use --method global-scale")
@@ -160,10 +160,12 @@ def generate_frames(
     net = model.build_generator(device)
     size, layout = model.canvas.size, track.joint_layout
     prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
-    with torch.inference_mode():
-        for start in range(0, track.num_frames, chunk):
-            joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
-            maps = np.stack([render_pose_map(j, size, layout) for j in joints])  # [C, S, S, 3]
+    for start in range(0, track.num_frames, chunk):
+        joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
+        maps = np.stack([render_pose_map(j, size, layout) for j in joints])  # [C, S, S, 3]
+        # The grad mode is entered and left between yields: a context held across a yield would leak into
+        # the caller, and interleaved streams would restore each other's modes in the wrong order.
+        with torch.inference_mode():
             pose = to_tensor(maps).to(device)  # [C, 3, S, S]
             if model.temporal:
                 outs = []
@@ -173,7 +175,7 @@ def generate_frames(
                 frames = to_images(torch.cat(outs))
             else:
                 frames = to_images(net(pose))
-            yield from zip(maps, frames)
+        yield from zip(maps, frames)
 
 
 def side_by_side_frame(driver_joints: np.ndarray, driver_canvas: Any, pose_map: np.ndarray, frame: np.ndarray,
@@ -223,7 +225,7 @@ def drive(
         poses_out: also write the driven poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
         side_by_side: frames show driver skeleton | driven skeleton | result.
         device: where the networks run.
-        weights: retargeting weights (default: the shipped ones or, failing that, the model's stored codes).
+        weights: retargeting weights (default: those the model's codes came from, else the shipped ones).
         overwrite: replace existing outputs.
         max_gap: fill gaps of at most this many frames in the driver (0: none).
         progress: called with (frames done, total) after every frame.

@@ -13,6 +13,11 @@ interpolated linearly between the height ratios at the two ends:
 The paper gives only the vertical mapping. Horizontally we keep the driver's motion: its offset from its own
 median foot x is scaled and added to the reference's median foot x. "Min" and "max" are robust quantiles and
 "the tallest height" near each end a high quantile, so a few wrong detections do not decide the result.
+
+One guard the paper does not need for its long dance videos: a driver whose feet hardly move vertically
+(a range under ``min_span`` of its height, e.g. someone standing in place) has no depth range to map; the
+formula would blow its foot jitter up to the reference's whole range. Such a driver keeps one depth: its
+median foot position goes to the reference's median foot position, at the mean height ratio.
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ class ScaleStats:
         height_far: the performer's apparent height near the farthest position.
         height_close: the performer's apparent height near the closest position.
         center_x: median x of the feet.
+        foot_median: median y of the feet (where the performer usually stands).
     """
 
     foot_far: float
@@ -44,13 +50,20 @@ class ScaleStats:
     height_far: float
     height_close: float
     center_x: float
+    foot_median: float
+
+    @property
+    def height(self) -> float:
+        """Mean of the far and close heights."""
+        return 0.5 * (self.height_far + self.height_close)
 
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> ScaleStats:
-        return cls(**{k: float(d[k]) for k in ("foot_far", "foot_close", "height_far", "height_close", "center_x")})
+        keys = ("foot_far", "foot_close", "height_far", "height_close", "center_x", "foot_median")
+        return cls(**{k: float(d[k]) for k in keys})
 
 
 def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
@@ -114,6 +127,7 @@ def scale_stats(
     return ScaleStats(
         foot_far=float(far), foot_close=float(close), height_far=float(max(h_far, 1e-3)),
         height_close=float(max(h_close, 1e-3)), center_x=float(np.median(foot[ok, 0])),
+        foot_median=float(np.median(fy)),
     )
 
 
@@ -127,31 +141,36 @@ def interpolate_missing(values: np.ndarray) -> np.ndarray:
     return np.interp(t, t[ok], values[ok])
 
 
-def global_scale_params(foot_y: np.ndarray, source: ScaleStats, target: ScaleStats) -> tuple[np.ndarray, np.ndarray]:
+def global_scale_params(
+    foot_y: np.ndarray, source: ScaleStats, target: ScaleStats, min_span: float = 0.05
+) -> tuple[np.ndarray, np.ndarray]:
     """Per-frame scale and target foot y.
 
     Args:
         foot_y: [T] the source's lower-ankle y per frame (no NaN).
         source: statistics of the source (driver) video.
         target: statistics of the target (reference) video.
+        min_span: a source foot range below this fraction of the source's height counts as one depth.
 
     Returns:
-        ``(scale [T], target_foot_y [T])``. A source whose feet never move vertically maps to the middle of
-        the target's range.
+        ``(scale [T], target_foot_y [T])``.
     """
-    span = source.foot_close - source.foot_far
-    if abs(span) > 1e-6:
-        a = (foot_y - source.foot_far) / span
-    else:
-        a = np.full_like(foot_y, 0.5, dtype=np.float64)
+    foot_y = np.asarray(foot_y, dtype=np.float64)
     ratio_far = target.height_far / source.height_far
     ratio_close = target.height_close / source.height_close
+    span = source.foot_close - source.foot_far
+    if span <= min_span * source.height:
+        scale = np.full_like(foot_y, 0.5 * (ratio_far + ratio_close))
+        return scale, target.foot_median + scale * (foot_y - source.foot_median)
+    a = (foot_y - source.foot_far) / span
     scale = np.maximum(ratio_far + a * (ratio_close - ratio_far), 1e-3)
     target_y = target.foot_far + a * (target.foot_close - target.foot_far)
     return scale, target_y
 
 
-def apply_global_scale(joints: np.ndarray, layout: JointLayout, source: ScaleStats, target: ScaleStats) -> np.ndarray:
+def apply_global_scale(
+    joints: np.ndarray, layout: JointLayout, source: ScaleStats, target: ScaleStats, min_span: float = 0.05
+) -> np.ndarray:
     """Move a source track onto a target's feet positions and scale.
 
     Args:
@@ -159,6 +178,7 @@ def apply_global_scale(joints: np.ndarray, layout: JointLayout, source: ScaleSta
         layout: layout of ``joints``.
         source: statistics of the source (usually ``scale_stats(joints, layout)``).
         target: statistics of the target (reference).
+        min_span: see :func:`global_scale_params`.
 
     Returns:
         [T, J, 2] float32 in the target's image pixels, NaN where the input is NaN. Frames without a visible
@@ -168,7 +188,7 @@ def apply_global_scale(joints: np.ndarray, layout: JointLayout, source: ScaleSta
     fy = interpolate_missing(foot[:, 1])
     if not np.isfinite(fy).all():
         raise InputError("global scaling needs ankles, and no frame shows one")
-    scale, target_y = global_scale_params(fy, source, target)  # [T], [T]
+    scale, target_y = global_scale_params(fy, source, target, min_span)  # [T], [T]
     out = np.empty(joints.shape, dtype=np.float64)
     out[..., 0] = target.center_x + scale[:, None] * (joints[..., 0] - source.center_x)
     out[..., 1] = target_y[:, None] + scale[:, None] * (joints[..., 1] - fy[:, None])

@@ -233,22 +233,22 @@ GENERATORS: dict[str, type[UNetGenerator]] = {"unet": UNetGenerator}
 DISCRIMINATORS: dict[str, type[PatchDiscriminator]] = {"patch": PatchDiscriminator}
 
 
+def _build(registry: dict, kind: str, name: str, config: object) -> nn.Module:
+    try:
+        cls = registry[name]
+    except KeyError:
+        raise ValueError(f"unknown {kind} {name!r}; valid: {', '.join(sorted(registry))}") from None
+    return cls(config)
+
+
 def build_generator(name: str, config: GeneratorConfig) -> UNetGenerator:
     """Generator ``name`` from ``GENERATORS``; an unknown name raises ValueError listing the valid ones."""
-    try:
-        cls = GENERATORS[name]
-    except KeyError:
-        raise ValueError(f"unknown generator {name!r}; valid: {', '.join(sorted(GENERATORS))}") from None
-    return cls(config)
+    return _build(GENERATORS, "generator", name, config)  # type: ignore[return-value]
 
 
 def build_discriminator(name: str, config: DiscriminatorConfig) -> PatchDiscriminator:
     """Discriminator ``name`` from ``DISCRIMINATORS``; an unknown name raises ValueError listing the valid ones."""
-    try:
-        cls = DISCRIMINATORS[name]
-    except KeyError:
-        raise ValueError(f"unknown discriminator {name!r}; valid: {', '.join(sorted(DISCRIMINATORS))}") from None
-    return cls(config)
+    return _build(DISCRIMINATORS, "discriminator", name, config)  # type: ignore[return-value]
 
 
 def lsgan_loss(scores: Tensor, real: bool) -> Tensor:

@@ -683,7 +683,8 @@ def train_reference(
     interrupted = False
     losses: dict[str, float] = {}
 
-    with frame_store(count, canvas.size) as store:
+    # Training needs autograd whatever mode the caller left torch in.
+    with torch.enable_grad(), frame_store(count, canvas.size) as store:
         for i, frame in enumerate(frames):
             if i >= count:
                 break

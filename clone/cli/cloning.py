@@ -125,7 +125,8 @@ def drive(
         "--side-by-side", help="Frames show driver skeleton | driven skeleton | result.")] = False,
     device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
-    weights: Annotated[Path | None, typer.Option("--weights", help="Retargeting weights (default: shipped).")] = None,
+    weights: Annotated[Path | None, typer.Option(
+        "--weights", help="Retargeting weights (default: those the model's codes came from, else shipped).")] = None,
     max_gap: Annotated[int, typer.Option(
         "--max-gap", min=0, help="Fill gaps of up to this many frames in the driver.")] = 5,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,

@@ -15,21 +15,15 @@ from clone.drive import generate_frames, move_onto_reference
 from clone.reference_model import load_reference_model
 from pose_io.readers import read_track
 from pose_io.writers import write_track
-from retarget.api import PACKAGED_WEIGHTS
-from tests.clone.test_train_ref import (
+from retarget import api as retarget_api
+from tests.clone.test_train_ref import (  # noqa: F401 (_restore_threads is an autouse fixture)
     OFFICIAL_WEIGHTS,
+    _restore_threads,
     figure_track,
     one_line_error,
     train_args,
     write_reference,
 )
-
-
-@pytest.fixture(autouse=True)
-def _restore_threads():
-    before = torch.get_num_threads()
-    yield
-    torch.set_num_threads(before)
 
 
 @pytest.fixture
@@ -146,10 +140,26 @@ def test_bad_method_and_empty_driver(trained, tmp_path):
     assert not out.exists()
 
 
-@pytest.mark.skipif(PACKAGED_WEIGHTS.is_file(), reason="retargeting weights are shipped")
-def test_retarget_without_codes_or_weights_is_a_clear_error(trained, driver, tmp_path):
-    line = one_line_error(CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", trained)))
+def test_retarget_without_codes_or_weights_is_a_clear_error(driver, tmp_path, monkeypatch):
+    monkeypatch.setattr(retarget_api, "PACKAGED_WEIGHTS", tmp_path / "not_shipped.pt")
+    poses, frames = write_reference(tmp_path / "ref", figure_track(24))
+    model_path = tmp_path / "ref.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, model_path)).exit_code == 0
+    assert load_reference_model(model_path).reference_codes is None
+    line = one_line_error(CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", model_path)))
     assert "--weights" in line and "global-scale" in line
+
+
+@pytest.mark.skipif(not OFFICIAL_WEIGHTS.is_file(), reason="the authors' retargeting weights are not present")
+def test_shipped_weights_are_used_without_flags(driver, tmp_path, monkeypatch):
+    monkeypatch.setattr(retarget_api, "PACKAGED_WEIGHTS", OFFICIAL_WEIGHTS)
+    poses, frames = write_reference(tmp_path / "ref", figure_track(64))
+    model_path = tmp_path / "ref.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, model_path)).exit_code == 0
+    assert load_reference_model(model_path).reference_codes is not None
+    result = CliRunner().invoke(app, drive_args(driver, tmp_path / "o.mp4", model_path))
+    assert result.exit_code == 0, result.output
+    assert len(read_video(tmp_path / "o.mp4")[0]) == 30
 
 
 @pytest.mark.skipif(not OFFICIAL_WEIGHTS.is_file(), reason="the authors' retargeting weights are not present")
@@ -185,3 +195,13 @@ def test_generation_is_deterministic_and_global_scale_lands_on_the_reference(tra
     big = ref.replace(joints=ref.joints * 2.0, image_size=(2 * ref.image_size[0], 2 * ref.image_size[1]))
     moved = move_onto_reference(big, model, "global-scale")
     np.testing.assert_allclose(moved.joints, ref.joints, atol=0.05)
+
+
+def test_interleaved_generation_streams_leave_autograd_alone(trained):
+    model = load_reference_model(trained)
+    track = model.reference_track.frames(0, 5)
+    streams = [generate_frames(model, track, chunk=2) for _ in range(2)]
+    for a, b in zip(*streams):
+        assert torch.is_grad_enabled() and not torch.is_inference_mode_enabled()
+        assert np.array_equal(a[1], b[1])
+    assert torch.is_grad_enabled()

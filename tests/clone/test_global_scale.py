@@ -42,16 +42,23 @@ def test_driver_scaled_by_two_comes_back_at_reference_scale():
 
 
 def test_known_parameters():
-    source = ScaleStats(foot_far=100, foot_close=300, height_far=50, height_close=100, center_x=0)
-    target = ScaleStats(foot_far=200, foot_close=400, height_far=100, height_close=150, center_x=10)
+    source = ScaleStats(foot_far=100, foot_close=300, height_far=50, height_close=100, center_x=0, foot_median=200)
+    target = ScaleStats(foot_far=200, foot_close=400, height_far=100, height_close=150, center_x=10, foot_median=390)
     scale, y = global_scale_params(np.array([100.0, 200.0, 300.0]), source, target)
     np.testing.assert_allclose(scale, [2.0, 1.75, 1.5])
     np.testing.assert_allclose(y, [200.0, 300.0, 400.0])
-    # A source whose feet never move vertically goes to the middle of the target's range.
-    flat = ScaleStats(foot_far=100, foot_close=100, height_far=50, height_close=50, center_x=0)
-    scale, y = global_scale_params(np.array([100.0]), flat, target)
-    np.testing.assert_allclose(y, [300.0])
-    np.testing.assert_allclose(scale, [0.5 * (2.0 + 3.0)])
+
+
+def test_driver_standing_in_place_keeps_one_depth():
+    # Feet range 2 px for a 100 px tall driver: its jitter must not be stretched over the target's 200 px.
+    flat = ScaleStats(foot_far=99, foot_close=101, height_far=100, height_close=100, center_x=0, foot_median=100)
+    target = ScaleStats(foot_far=200, foot_close=400, height_far=100, height_close=300, center_x=10, foot_median=390)
+    scale, y = global_scale_params(np.array([99.0, 100.0, 101.0]), flat, target)
+    np.testing.assert_allclose(scale, [2.0, 2.0, 2.0])
+    np.testing.assert_allclose(y, [388.0, 390.0, 392.0])
+    # With the guard off, the paper's formula maps the 2 px onto the whole range.
+    _, y = global_scale_params(np.array([99.0, 101.0]), flat, target, min_span=0.0)
+    np.testing.assert_allclose(y, [200.0, 400.0])
 
 
 def test_foot_is_the_lower_ankle_and_missing_frames_are_interpolated():

@@ -81,8 +81,8 @@ def write_reference(folder: Path, track: PoseTrack, frames: list[np.ndarray] | N
     return poses, frame_dir
 
 
-def train_args(poses: Path, frames: Path, out: Path, *extra: str) -> list[str]:
-    return ["train-ref", str(poses), str(frames), "--out", str(out), "--size", "32", "--steps", "3",
+def train_args(poses: Path, frames: Path, out: Path, *extra: str, steps: int = 3) -> list[str]:
+    return ["train-ref", str(poses), str(frames), "--out", str(out), "--size", "32", "--steps", str(steps),
             "--threads", "1", "--device", "cpu", *extra]
 
 
@@ -155,6 +155,35 @@ def test_resume_continues_the_step_count(reference, tmp_path):
     assert "--size 64 differs" in one_line_error(CliRunner().invoke(app, args + ["--size", "64"]))
     missing = ["train-ref", str(poses), str(frames), "--out", str(tmp_path / "none.pt"), "--resume"]
     assert "nothing to resume" in one_line_error(CliRunner().invoke(app, missing))
+
+
+def test_resumed_run_equals_an_uninterrupted_one(reference, tmp_path):
+    poses, frames = reference
+    straight, split = tmp_path / "straight.pt", tmp_path / "split.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, straight, steps=4)).exit_code == 0
+    assert CliRunner().invoke(app, train_args(poses, frames, split, steps=2)).exit_code == 0
+    more = ["train-ref", str(poses), str(frames), "--out", str(split), "--steps", "4", "--threads", "1", "--resume"]
+    assert CliRunner().invoke(app, more).exit_code == 0
+    a, b = load_reference_model(straight), load_reference_model(split)
+    assert a.training["steps"] == b.training["steps"] == 4
+    for key, value in a.generator_state.items():
+        torch.testing.assert_close(b.generator_state[key], value, rtol=0, atol=0)
+
+
+def test_video_reference_uses_the_video_fps(tmp_path):
+    from pose_io.video import VideoWriter
+
+    track = figure_track(20, width=96, height=72, fps=25.0)
+    poses = write_track(track.replace(fps=10.0), tmp_path / "poses.npz")
+    video = tmp_path / "ref.mp4"
+    with VideoWriter(video, fps=15.0) as writer:
+        for frame in render_figure(track):
+            writer.write(frame)
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, video, out))
+    assert result.exit_code == 0, result.output
+    model = load_reference_model(out)
+    assert model.reference_track.fps == pytest.approx(15.0) and model.reference_track.num_frames == 20
 
 
 def test_mismatched_counts_error_or_trim(tmp_path):
