@@ -48,6 +48,8 @@ from clone.cli import cloning  # noqa: E402
 app.command("train-ref")(cloning.train_ref); app.command("drive")(cloning.drive)  # noqa: E702
 from clone.cli.report import report_command  # noqa: E402
 app.command("report")(report_command)
+from clone.cli.demo import demo_command  # noqa: E402
+app.command("demo")(demo_command)
 
 
 def main() -> None:
