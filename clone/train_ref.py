@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
@@ -68,6 +68,9 @@ from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
 from pose_io.track import PoseTrack
+
+if TYPE_CHECKING:
+    from pose_io.video import Frames
 
 log = logging.getLogger(__name__)
 
@@ -272,7 +275,7 @@ def frame_store(count: int, size: int) -> Iterator[np.ndarray]:
 
 def read_reference(
     poses_path: str | os.PathLike, frames_path: str | os.PathLike, align: str = "exact"
-) -> tuple[PoseTrack, Any, int]:
+) -> tuple[PoseTrack, Frames, int]:
     """Open the reference's poses and frames and check that they belong together.
 
     Args:

@@ -39,7 +39,7 @@ def train_ref(
     frames: Annotated[Path, typer.Argument(help="The reference's frames: a video or a folder of images.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Reference model to write.")] = DEFAULT_MODEL,
     size: Annotated[int | None, typer.Option(
-        "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from 32). Default {DEFAULT_SIZE}.")] = None,
+        "--size", help=f"Canvas size: 128, 256 or 512 (any power of two >= 16). Default {DEFAULT_SIZE}.")] = None,
     steps: Annotated[int | None, typer.Option(
         "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes).")] = None,
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
