@@ -100,9 +100,8 @@ class Frames:
         import imageio_ffmpeg
 
         w, h = self.size
-        gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
+        gen, _meta = _ffmpeg_reader(self.path)
         try:
-            next(gen)  # metadata
             for raw in gen:
                 yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()  # [H, W, 3]
         finally:
@@ -154,12 +153,33 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Frames:
     return _open_video(path, fps)
 
 
-def _open_video(path: Path, fps: float | None) -> Frames:
+def _ffmpeg_reader(path: Path, attempts: int = 3) -> tuple[Iterator[bytes], dict]:
+    """imageio-ffmpeg's frame generator and the video's metadata.
+
+    imageio-ffmpeg reads the metadata from ffmpeg's log in a thread; on a busy machine a very short video can
+    finish before that thread has seen the header ("Could not load meta information"). Opening again works.
+    """
     import imageio_ffmpeg
 
-    gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+    for attempt in range(attempts):
+        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+        try:
+            return gen, next(gen)
+        except OSError as exc:
+            gen.close()
+            if "meta information" not in str(exc) or attempt == attempts - 1:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _open_video(path: Path, fps: float | None) -> Frames:
     try:
-        meta = next(gen)
+        gen, meta = _ffmpeg_reader(path)
+    except StopIteration:
+        raise InputError(f"{path}: video has no frames") from None
+    except (OSError, RuntimeError, ValueError) as exc:
+        raise InputError(f"{path}: cannot read as a video ({_first_line(exc)})") from None
+    try:
         next(gen)  # the first frame must decode
     except StopIteration:
         raise InputError(f"{path}: video has no frames") from None
