@@ -32,7 +32,7 @@ import numpy as np
 import torch
 
 from clone.canvas import Canvas
-from clone.global_scale import ScaleStats
+from retarget.global_scale import ScaleStats
 from clone.networks import GeneratorConfig, UNetGenerator, build_generator
 from pose_io.atomic import atomic_file
 from pose_io.errors import InputError

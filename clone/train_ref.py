@@ -38,7 +38,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from clone.canvas import choose_canvas, cut_frame, image_to_canvas, render_pose_map
-from clone.global_scale import ScaleStats, scale_stats
+from retarget.global_scale import ScaleStats, scale_stats
 from clone.networks import (
     DiscriminatorConfig,
     GeneratorConfig,

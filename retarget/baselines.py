@@ -18,16 +18,15 @@ from __future__ import annotations
 import numpy as np
 
 from pose_io.track import PoseTrack
+from retarget.global_scale import apply_global_scale, scale_stats
 from retarget.preprocess import (
     LAYOUT,
     ROOT,
     ROOT_INDEX,
     body15_track,
     filled_body15,
-    ground_heights,
     place,
     placement_of,
-    pose_heights,
     to_body15,
 )
 
@@ -37,30 +36,13 @@ def _output(joints: np.ndarray, motion: PoseTrack, reference: PoseTrack) -> Pose
     return body15_track(placed, motion.fps, reference.image_size)
 
 
-def _depth_profile(joints: np.ndarray, near_fraction: float) -> tuple[float, float, float, float]:
-    """(far ankle y, near ankle y, pose height at far, pose height at near) of one track.
-
-    The heights are the largest among frames whose ankle is within ``near_fraction`` of the ankle range
-    from that end (the tallest pose there is the most upright one).
-    """
-    ankle = ground_heights(joints)  # [T]
-    height = pose_heights(joints)  # [T]
-    far, near = float(np.min(ankle)), float(np.max(ankle))
-    band = max(near - far, 1e-6) * near_fraction
-    h_far = float(np.max(height[ankle <= far + band]))
-    h_near = float(np.max(height[ankle >= near - band]))
-    return far, near, h_far, h_near
-
-
 def global_scale_retarget(
-    motion: PoseTrack, reference: PoseTrack, near_fraction: float = 0.05, min_depth_range: float = 0.05
+    motion: PoseTrack, reference: PoseTrack, near_fraction: float = 0.1, min_depth_range: float = 0.05
 ) -> PoseTrack:
-    """Everybody Dance Now's global pose normalisation.
+    """Everybody Dance Now's global pose normalisation (see :mod:`retarget.global_scale`), as a baseline.
 
-    For a driver frame whose lower ankle is at height ``y``, with ``a = (y - far_d) / (near_d - far_d)``:
-    scale ``s = h_ref_far / h_drv_far + a * (h_ref_near / h_drv_near - h_ref_far / h_drv_far)`` and the
-    ankle goes to ``far_r + a * (near_r - far_r)``. When the driver hardly changes depth (ankle range below
-    ``min_depth_range`` of its height), one scale from the tallest poses is used.
+    The same functions drive ``clone drive --method global-scale``; here the result is also placed like the
+    network's output (median root x and ground line of the reference) so all methods compare frame by frame.
 
     Args:
         motion: driver track (any layout convertible to body15).
@@ -73,23 +55,9 @@ def global_scale_retarget(
     """
     drv = filled_body15(motion, "motion track")
     ref = filled_body15(reference, "reference track")
-    far_d, near_d, hf_d, hn_d = _depth_profile(drv, near_fraction)
-    far_r, near_r, hf_r, hn_r = _depth_profile(ref, near_fraction)
-    ankle = ground_heights(drv)  # [T]
-    if near_d - far_d < min_depth_range * max(hn_d, hf_d):
-        alpha = np.zeros_like(ankle)
-        hf_d = hn_d = max(hf_d, hn_d)
-        hf_r = hn_r = max(hf_r, hn_r)
-    else:
-        alpha = (ankle - far_d) / (near_d - far_d)
-    scale = hf_r / hf_d + alpha * (hn_r / hn_d - hf_r / hf_d)  # [T]
-    target_ankle = far_r + alpha * (near_r - far_r)  # [T]
-    root_x = drv[:, ROOT_INDEX, 0]
-    out = np.empty_like(drv)
-    # Horizontal travel scales with the mean scale; the pose itself with the frame's scale.
-    out[..., 0] = scale.mean() * (root_x - root_x[0])[:, None] + scale[:, None] * (drv[..., 0] - root_x[:, None])
-    out[..., 1] = target_ankle[:, None] + scale[:, None] * (drv[..., 1] - ankle[:, None])
-    return _output(out, motion, reference)
+    source = scale_stats(drv, LAYOUT, band=near_fraction)
+    target = scale_stats(ref, LAYOUT, band=near_fraction)
+    return _output(apply_global_scale(drv, LAYOUT, source, target, min_span=min_depth_range), motion, reference)
 
 
 def limb_lengths(joints: np.ndarray, quantile: float = 0.95) -> np.ndarray:

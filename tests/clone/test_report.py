@@ -208,7 +208,7 @@ def tiny_models(tmp_path):
     import torch
 
     from clone.canvas import full_frame_canvas
-    from clone.global_scale import scale_stats
+    from retarget.global_scale import scale_stats
     from clone.networks import GeneratorConfig, build_generator
     from clone.reference_model import ReferenceModel, save_reference_model
     from retarget.checkpoint import save_checkpoint

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from clone.global_scale import (
+from retarget.global_scale import (
     ScaleStats,
     apply_global_scale,
     foot_points,
