@@ -113,3 +113,41 @@ def train(
     )
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
     console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
+
+
+@retarget_app.command("eval")
+@user_errors
+def evaluate(
+    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the world is built from.")],
+    out: Annotated[Path, typer.Option("--out", help="Folder for eval.json, eval.md and code plots.")],
+    weights: Annotated[Path | None, typer.Option("--weights", help="Our checkpoint (default: shipped).")] = None,
+    compare: Annotated[
+        list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
+    ] = None,
+    official: Annotated[
+        Path | None, typer.Option("--official", help="Folder with the authors' pretrained_full.pth and .npy.")
+    ] = None,
+    cache: Annotated[Path | None, typer.Option("--cache", help="World cache folder.")] = None,
+    pairs: Annotated[int, typer.Option("--pairs", min=1, help="Test cases.")] = 300,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the case sampling.")] = 0,
+    split: Annotated[str, typer.Option("--split", help="test | val")] = "test",
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
+) -> None:
+    """Error table of ours vs baselines on unseen motions and characters, plus code silhouettes."""
+    from pose_io.errors import InputError
+    from retarget.evaluate import EvalConfig, run_eval
+    from retarget.runtime import configure_threads
+    from retarget.world import MotionWorld
+
+    configure_threads()
+    named = {}
+    for item in compare or []:
+        name, sep, path = item.partition("=")
+        if not sep or not name or not path:
+            raise InputError(f"--compare {item!r}: expected NAME=PATH")
+        named[name] = Path(path)
+    world = MotionWorld.build(mocap, cache)
+    doc, table = run_eval(world.split(split), out, weights, named, official, EvalConfig(pairs=pairs, seed=seed),
+                          overwrite=overwrite)  # fmt: skip
+    typer.echo(table)
+    console.print(f"wrote {out}/eval.json and eval.md in {doc['seconds']:.0f} s")
