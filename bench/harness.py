@@ -11,8 +11,8 @@ import platform
 import resource
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from typing import Callable
 
 
 @dataclass
@@ -51,8 +51,19 @@ def time_call(fn: Callable[[], object], repeats: int = 5, warmup: int = 1, min_t
 
 
 def peak_rss_mb() -> float:
-    """Peak resident memory of this process so far, in MiB (Linux reports KiB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    """Peak resident memory of this process so far, in MiB.
+
+    Reads ``VmHWM`` from /proc/self/status: ``ru_maxrss`` survives ``exec``, so a subprocess started by a
+    big parent would report at least the parent's RSS at the fork. Falls back to ``ru_maxrss`` elsewhere.
+    """
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux reports KiB
 
 
 def machine_info() -> dict[str, object]:
@@ -74,3 +85,78 @@ def machine_info() -> dict[str, object]:
 
 def as_dict(obj: object) -> object:
     return asdict(obj) if hasattr(obj, "__dataclass_fields__") else obj
+
+
+def load_average() -> list[float]:
+    """1-, 5- and 15-minute load averages (the machine is shared: every figure carries them)."""
+    import os
+
+    try:
+        return [round(v, 2) for v in os.getloadavg()]
+    except OSError:  # not on Unix
+        return []
+
+
+def row(
+    case: str,
+    variant: str,
+    value: float,
+    unit: str,
+    baseline: float | None = None,
+    baseline_variant: str | None = None,
+    higher_is_better: bool = True,
+    **extra: object,
+) -> dict[str, object]:
+    """One result: ``value`` of ``variant`` and, when given, the same-run baseline and the speed-up over it.
+
+    ``speedup`` is value / baseline for rates (frames/s) and baseline / value for times and memory, so
+    above 1 always means better than the baseline.
+    """
+    speedup = None
+    if baseline is not None and value > 0 and baseline > 0:
+        speedup = value / baseline if higher_is_better else baseline / value
+    return {
+        "case": case,
+        "variant": variant,
+        "value": float(value),
+        "unit": unit,
+        "baseline_variant": baseline_variant,
+        "baseline": None if baseline is None else float(baseline),
+        "speedup": None if speedup is None else round(speedup, 3),
+        "load_average": load_average(),
+        "extra": extra,
+    }
+
+
+def run_child(module: str, args: dict[str, object], timeout_s: float = 600.0) -> dict[str, object]:
+    """Run ``python -m <module> '<json args>'`` in a fresh process and return the JSON of its last stdout line.
+
+    A fresh process per configuration makes its peak RSS (``VmHWM``, see :func:`peak_rss_mb`) that configuration's alone.
+
+    Raises:
+        RuntimeError: the child failed or printed no JSON (its stderr tail is in the message).
+    """
+    import json
+    import subprocess
+    import sys
+
+    proc = subprocess.run(
+        [sys.executable, "-m", module, json.dumps(args)], capture_output=True, text=True, timeout=timeout_s,
+        check=False,
+    )
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
+    if proc.returncode != 0 or not lines:
+        raise RuntimeError(f"{module} {args} failed (exit {proc.returncode}): {proc.stderr[-2000:]}")
+    return json.loads(lines[-1])
+
+
+def rss_mb() -> float:
+    """Current resident memory of this process in MiB (Linux /proc; falls back to the peak)."""
+    try:
+        with open("/proc/self/statm") as f:
+            pages = int(f.read().split()[1])
+        import os
+
+        return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, ValueError, IndexError):
+        return peak_rss_mb()
