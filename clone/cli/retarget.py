@@ -118,36 +118,63 @@ def train(
 @retarget_app.command("eval")
 @user_errors
 def evaluate(
-    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the world is built from.")],
-    out: Annotated[Path, typer.Option("--out", help="Folder for eval.json, eval.md and code plots.")],
-    weights: Annotated[Path | None, typer.Option("--weights", help="Our checkpoint (default: shipped).")] = None,
+    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")],
+    out: Annotated[Path, typer.Option("--out", help="Folder to write: eval.json, eval.md, codes_*.png.")],
+    weights: Annotated[
+        Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights, if any).")
+    ] = None,
     compare: Annotated[
         list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
     ] = None,
     official: Annotated[
-        Path | None, typer.Option("--official", help="Folder with the authors' pretrained_full.pth and .npy.")
+        Path | None,
+        typer.Option("--official", help="Folder of the authors' pretrained_{full,skeleton,view}.pth and .npy."),
     ] = None,
-    cache: Annotated[Path | None, typer.Option("--cache", help="World cache folder.")] = None,
-    pairs: Annotated[int, typer.Option("--pairs", min=1, help="Test cases.")] = 300,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of the case sampling.")] = 0,
-    split: Annotated[str, typer.Option("--split", help="test | val")] = "test",
+    bvh: Annotated[
+        list[Path] | None, typer.Option("--bvh", help="Extra mocap file replayed on the test characters (repeatable).")
+    ] = None,
+    pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 300,
+    length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the cases.")] = 0,
+    split: Annotated[str, typer.Option("--split", help="World split: test | val.")] = "test",
+    world_seed: Annotated[
+        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
+    ] = 0,
+    cache: Annotated[
+        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
+    ] = None,
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")] = None,
+    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
-    """Error table of ours vs baselines on unseen motions and characters, plus code silhouettes."""
+    """Retargeting error of our network vs baselines on unseen motions and characters, and code silhouettes."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from pose_io.atomic import check_new_output
     from pose_io.errors import InputError
     from retarget.evaluate import EvalConfig, run_eval
     from retarget.runtime import configure_threads
     from retarget.world import MotionWorld
 
-    configure_threads()
-    named = {}
+    check_new_output(out, overwrite)
+    named: dict[str, Path] = {}
     for item in compare or []:
         name, sep, path = item.partition("=")
-        if not sep or not name or not path:
+        if not sep or not name.strip() or not path:
             raise InputError(f"--compare {item!r}: expected NAME=PATH")
-        named[name] = Path(path)
-    world = MotionWorld.build(mocap, cache)
-    doc, table = run_eval(world.split(split), out, weights, named, official, EvalConfig(pairs=pairs, seed=seed),
-                          overwrite=overwrite)  # fmt: skip
+        named[name.strip()] = Path(path)
+    if split not in ("test", "val"):
+        raise InputError(f"--split {split!r}: valid: test, val")
+    configure_threads(threads)
+    world = MotionWorld.build(mocap, cache, seed=world_seed)
+    with Progress(TextColumn("[bold]eval"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                  console=console, transient=True) as bar:  # fmt: skip
+        task = bar.add_task("eval", total=None)
+        doc, table = run_eval(
+            world.split(split), out, weights=weights, compare=named, official=official, bvh=bvh or (),
+            config=EvalConfig(pairs=pairs, length=length, seed=seed), fps=world.config.fps, device=device,
+            overwrite=overwrite, world_seed=world_seed,
+            progress=lambda done, total: bar.update(task, completed=done, total=total),
+        )
     typer.echo(table)
-    console.print(f"wrote {out}/eval.json and eval.md in {doc['seconds']:.0f} s")
+    console.print(f"wrote {out}: eval.json, eval.md and {len(doc['silhouettes'])} code plots in {doc['seconds']:.0f} s")

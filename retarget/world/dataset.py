@@ -339,20 +339,11 @@ class WorldSplit:
         """
         if not len(motions) == len(characters) == len(views):
             raise ValueError("motions, characters and views must have the same length")
-        b = len(motions)
         views_a = np.asarray(views, dtype=np.int64)
         if ((views_a < 0) | (views_a >= self.num_views)).any():
             raise IndexError(f"views must be in 0..{self.num_views - 1}")
         pos = np.stack([self.window3d(m, c, length, offset) for m, c in zip(motions, characters)])  # [B, L, 18, 3]
         return self.project(pos, views_a, rng, pitch_deg)
-
-    def source_window3d(self, motion: int, length: int | None = None, offset: int = 0) -> np.ndarray:
-        """[length, 18, 3] like ``window3d`` but on the clip's own (captured) skeleton."""
-        frames = self._frames(motion, self.window_length if length is None else length, offset)
-        pos = np.array(self.source_positions[frames], dtype=np.float32)
-        pos[..., 0] -= pos[0, _ROOT, 0]
-        pos[..., 2] -= pos[0, _ROOT, 2]
-        return pos
 
     def project(
         self,
@@ -361,9 +352,16 @@ class WorldSplit:
         rng: np.random.Generator | None = None,
         pitch_deg: Sequence[float] | None = None,
     ) -> np.ndarray:
-        """[B, L, 18, 3] world joints (as ``window3d`` gives them) -> [B, L, 15, 2] body15 pixels from views.
+        """[B, L, 18, 3] world joints (as ``window3d`` gives them) -> [B, L, 15, 2] float32 body15 pixels.
 
-        The same camera and framing rule as ``windows``.
+        The camera and framing rule of ``windows``: each clip's yaw is relative to its own average facing,
+        the ground under its first root lands at (W/2, 0.9 H).
+
+        Args:
+            pos: [B, L, 18, 3] metres, first root over the origin, ground at y = 0.
+            views: [B] view bins.
+            rng: draws each pitch uniformly in +-``MAX_PITCH``; None: pitch 0.
+            pitch_deg: [B] explicit pitches (override ``rng``).
         """
         b = len(pos)
         views_a = np.asarray(views, dtype=np.int64)
