@@ -104,7 +104,7 @@ class EvalConfig:
         code_samples: motions, characters and views each in the silhouette grid (``code_samples^3`` windows).
     """
 
-    pairs: int = 300
+    pairs: int = 500
     length: int = 64
     reference_length: int = 64
     seed: int = 0

@@ -133,7 +133,7 @@ def evaluate(
     bvh: Annotated[
         list[Path] | None, typer.Option("--bvh", help="Extra mocap file replayed on the test characters (repeatable).")
     ] = None,
-    pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 300,
+    pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the cases.")] = 0,
     split: Annotated[str, typer.Option("--split", help="World split: test | val.")] = "test",
