@@ -99,6 +99,17 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
             "generator": config.to_dict()}
 
 
+def cpu_bf16_note() -> str:
+    """Which native bf16 instructions /proc/cpuinfo lists (none means autocast emulates bf16)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((line for line in f if line.startswith("flags")), "").split()
+    except OSError:
+        return "flags unknown"
+    found = [f for f in ("avx512_bf16", "amx_bf16") if f in flags]
+    return ", ".join(found) if found else "no avx512_bf16 / amx_bf16"
+
+
 def run(quick: bool = False, **_: object) -> dict[str, Any]:
     from bench.harness import row, run_child
 
@@ -106,6 +117,7 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
     threads_list = (1,) if quick else (1, 2)
     options = [o for o in OPTIONS if not (quick and o == "compile")]
     rows, notes = [], []
+    slow_bf16: dict[int, float] = {}  # threads -> bf16 speed-up at 128²
     for size in sizes:
         for threads in threads_list:
             args = {"size": size, "threads": threads, "repeats": 3 if quick else 5,
@@ -113,6 +125,11 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
             base = run_child("bench.generator", {**args, "option": BASELINE})
             case = f"{size}x{size}, {threads} thread{'s' if threads > 1 else ''}"
             for option in options:
+                slow = slow_bf16.get(threads)
+                if option == "bf16_autocast" and size > 128 and slow is not None and slow < 0.25:
+                    notes.append(f"{case}: bf16 autocast skipped: at 128² it ran at {slow:.2f}x fp32 eager "
+                                 f"(this CPU has no native bf16: {cpu_bf16_note()})")
+                    continue
                 if option == "compile" and (threads > 1 or size > 128):
                     notes.append(f"{case}: torch.compile skipped: compiling takes ~45 s of a shared core per "
                                  "configuration here; 128², 1 thread is measured")
@@ -123,6 +140,8 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
                 except Exception as exc:  # noqa: BLE001 - a failing option is a result, not a crash
                     notes.append(f"{case}: {option} failed or timed out: {str(exc).splitlines()[0][:200]}")
                     continue
+                if option == "bf16_autocast" and size == 128:
+                    slow_bf16[threads] = r["fps"] / base["fps"]
                 rows.append(row(case, option, r["fps"], "frames/s", base["fps"], "eager fp32, autograd on",
                                 peak_rss_mb=round(r["peak_rss_mb"], 1), rss_delta_mb=round(r["rss_delta_mb"], 1),
                                 max_abs_diff=r["max_abs_diff"], prepare_s=round(r["prepare_s"], 2)))

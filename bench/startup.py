@@ -36,7 +36,7 @@ def _timed(cmd: list[str], repeats: int, cleanup: Path | None = None) -> float:
 def run(quick: bool = False, **_: object) -> dict[str, Any]:
     from pose_io.writers import write_track
 
-    repeats = 3 if quick else 5
+    repeats = 2 if quick else 3
     tmp = Path(tempfile.mkdtemp(prefix="bench_startup_"))
     try:
         source, origin = source_track()
