@@ -9,7 +9,14 @@ from __future__ import annotations
 import typer
 
 from clone import __version__
+from clone.cli import cloning
 from clone.cli.common import setup_logging
+from clone.cli.demo import demo_command
+from clone.cli.pose import pose_app
+from clone.cli.report import report_command
+from clone.cli.retarget import retarget_app
+from clone.cli.synth import synth_app
+from clone.cli.world import world_app
 
 app = typer.Typer(
     name="clone",
@@ -35,21 +42,16 @@ def _root(
     setup_logging(verbose)
 
 
-# Verb groups register below, one line each, as they land.
-from clone.cli.pose import pose_app  # noqa: E402
-app.add_typer(pose_app, name="pose")
-from clone.cli.retarget import retarget_app  # noqa: E402
-app.add_typer(retarget_app, name="retarget")
-from clone.cli.world import world_app  # noqa: E402
-app.add_typer(world_app, name="world")
-from clone.cli.synth import synth_app  # noqa: E402
-app.add_typer(synth_app, name="synth")
-from clone.cli import cloning  # noqa: E402
-app.command("train-ref")(cloning.train_ref); app.command("drive")(cloning.drive)  # noqa: E702
-from clone.cli.report import report_command  # noqa: E402
+# The command groups, in the order `clone --help` lists them (each module imports its heavy libraries inside its
+# commands, so registering them here keeps `clone --help` fast).
+app.command("train-ref")(cloning.train_ref)
+app.command("drive")(cloning.drive)
 app.command("report")(report_command)
-from clone.cli.demo import demo_command  # noqa: E402
 app.command("demo")(demo_command)
+app.add_typer(pose_app, name="pose")
+app.add_typer(retarget_app, name="retarget")
+app.add_typer(world_app, name="world")
+app.add_typer(synth_app, name="synth")
 
 
 def main() -> None:
