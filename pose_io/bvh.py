@@ -20,6 +20,7 @@ BVH conventions handled here:
 
 from __future__ import annotations
 
+import abc
 import gzip
 import math
 import re
@@ -142,7 +143,7 @@ def forward_kinematics(
     return rot, pos
 
 
-class _JointTree:
+class _JointTree(abc.ABC):
     """What both clip types share: name lookup, frame rate and positions from ``global_transforms``."""
 
     names: tuple[str, ...]
@@ -160,8 +161,9 @@ class _JointTree:
         except ValueError:
             raise KeyError(f"{self.source or 'clip'}: no joint {name!r}") from None
 
+    @abc.abstractmethod
     def global_transforms(self, joints: Iterable[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+        """``(rotations [T, N, 3, 3], positions [T, N, 3])`` of the joints (all by default); each clip type's FK."""
 
     def global_positions(self, joints: Iterable[int] | None = None) -> np.ndarray:
         """[T, N, 3] world positions of every joint and End Site (file units and axes)."""

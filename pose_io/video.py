@@ -97,8 +97,6 @@ class Frames:
         return frame
 
     def _video_frames(self) -> Iterator[np.ndarray]:
-        import imageio_ffmpeg
-
         w, h = self.size
         gen, _meta = _ffmpeg_reader(self.path)
         try:
