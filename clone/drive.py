@@ -25,12 +25,12 @@ import numpy as np
 import torch
 
 from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
-from retarget.global_scale import apply_global_scale, scale_stats
 from clone.networks import generator_input
 from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
 from pose_io.atomic import check_new_output
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget.global_scale import apply_global_scale, scale_stats
 
 log = logging.getLogger(__name__)
 

@@ -32,11 +32,11 @@ import numpy as np
 import torch
 
 from clone.canvas import Canvas
-from retarget.global_scale import ScaleStats
 from clone.networks import GeneratorConfig, UNetGenerator, build_generator
 from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget.global_scale import ScaleStats
 
 log = logging.getLogger(__name__)
 

@@ -38,7 +38,6 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from clone.canvas import choose_canvas, cut_frame, image_to_canvas, render_pose_map
-from retarget.global_scale import ScaleStats, scale_stats
 from clone.networks import (
     DiscriminatorConfig,
     GeneratorConfig,
@@ -68,6 +67,7 @@ from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
 from pose_io.track import PoseTrack
+from retarget.global_scale import ScaleStats, scale_stats
 
 if TYPE_CHECKING:
     from pose_io.video import Frames

@@ -7,9 +7,9 @@ as the mean of a few source joints (e.g. OpenPose's Neck from the two shoulders 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping
 
 import numpy as np
 

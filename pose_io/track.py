@@ -87,22 +87,22 @@ class PoseTrack:
         """[T, 2] coordinates of joint ``name``."""
         return self.joints[:, self.joint_layout.index(name)]
 
-    def replace(self, **changes: object) -> "PoseTrack":
+    def replace(self, **changes: object) -> PoseTrack:
         """A copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
-    def frames(self, start: int, stop: int) -> "PoseTrack":
+    def frames(self, start: int, stop: int) -> PoseTrack:
         """Frames ``start:stop`` as a new track."""
         return self.replace(joints=self.joints[start:stop], confidence=self.confidence[start:stop])
 
-    def to_layout(self, name: str) -> "PoseTrack":
+    def to_layout(self, name: str) -> PoseTrack:
         """This track in another joint layout (joints it cannot give are missing)."""
         source = self.joint_layout
         target = get_layout(name)
         joints, conf = convert_arrays(self.joints, self.confidence, source, target)
         return PoseTrack(joints, conf, self.fps, self.image_size, target.name)
 
-    def equals(self, other: "PoseTrack", atol: float = 0.0) -> bool:
+    def equals(self, other: PoseTrack, atol: float = 0.0) -> bool:
         """Same layout, fps, size, missing pattern, and coordinates/confidences within ``atol``."""
         return (
             self.layout == other.layout

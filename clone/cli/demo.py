@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -17,11 +17,11 @@ def demo_command(
     ),
     quick: Annotated[bool, typer.Option("--quick", help="Smaller videos and a shorter training budget.")] = False,
     minutes: Annotated[
-        Optional[float], typer.Option("--minutes", min=0.1, help="Training budget of the reference model.")
+        float | None, typer.Option("--minutes", min=0.1, help="Training budget of the reference model.")
     ] = None,
     device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
     weights: Annotated[
-        Optional[Path], typer.Option("--weights", help="Retargeting weights (default: the shipped ones).")
+        Path | None, typer.Option("--weights", help="Retargeting weights (default: the shipped ones).")
     ] = None,
 ) -> None:
     """Render a reference, a driver and the ground truth; train; drive with both methods; write the report."""

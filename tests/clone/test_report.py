@@ -208,10 +208,10 @@ def tiny_models(tmp_path):
     import torch
 
     from clone.canvas import full_frame_canvas
-    from retarget.global_scale import scale_stats
     from clone.networks import GeneratorConfig, build_generator
     from clone.reference_model import ReferenceModel, save_reference_model
     from retarget.checkpoint import save_checkpoint
+    from retarget.global_scale import scale_stats
     from retarget.model import NetworkConfig, RetargetNet
     from retarget.preprocess import NormStats
 

@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from pose_io import BODY15, InputError
 from retarget.global_scale import (
     ScaleStats,
     apply_global_scale,
@@ -9,7 +10,6 @@ from retarget.global_scale import (
     interpolate_missing,
     scale_stats,
 )
-from pose_io import BODY15, InputError
 
 
 def walking_body15(frames: int = 60, seed: int = 0) -> np.ndarray:
