@@ -33,7 +33,13 @@ from typing import Literal
 import numpy as np
 
 from pose_io.errors import InputError
-from pose_io.layouts import JointLayout, get_layout
+from pose_io.layouts import JointLayout
+from pose_io.measures import (
+    as_layout,
+    check_joints,
+    limb_lengths,
+    skeleton_height,
+)
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
@@ -119,10 +125,6 @@ class Scores:
         )
 
 
-def _layout(layout: JointLayout | str) -> JointLayout:
-    return get_layout(layout) if isinstance(layout, str) else layout
-
-
 def _mean(values: np.ndarray) -> float:
     """Mean of the finite-or-inf values, NaN ignored; NaN when there are none."""
     values = np.asarray(values, dtype=np.float64)
@@ -136,78 +138,6 @@ def _row_means(values: np.ndarray) -> np.ndarray:
     count = (~np.isnan(values)).sum(axis=1)
     sums = np.nansum(values, axis=1)
     return np.divide(sums, count, out=np.full(count.shape, np.nan), where=count > 0)
-
-
-def _check_joints(joints: np.ndarray, layout: JointLayout, what: str) -> np.ndarray:
-    joints = np.asarray(joints, dtype=np.float64)
-    if joints.ndim != 3 or joints.shape[1:] != (len(layout), 2):
-        raise InputError(
-            f"{what}: expected [T, {len(layout)}, 2] joints for {layout.name}, got {joints.shape}"
-        )
-    return joints
-
-
-def segment_lengths(joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """Lengths of joint-to-joint segments.
-
-    Args:
-        joints: [T, J, 2] pixel coordinates, NaN where missing.
-        pairs: [L, 2] joint index pairs.
-
-    Returns:
-        [T, L] float64 lengths, NaN where either end is missing.
-    """
-    joints = np.asarray(joints, dtype=np.float64)
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    return np.linalg.norm(joints[:, pairs[:, 0]] - joints[:, pairs[:, 1]], axis=-1)
-
-
-def limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
-    """[T, L] length of every limb of ``layout`` (in ``layout.limbs`` order) in every frame of [T, J, 2] joints."""
-    layout = _layout(layout)
-    return segment_lengths(_check_joints(joints, layout, "limb lengths"), layout.limb_indices)
-
-
-def reference_limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
-    """[L] the reference's length of every limb: the median over the frames of [T, J, 2] joints.
-
-    A limb missing in every frame gets NaN (and is then left out of the limb error), with a warning.
-    """
-    layout = _layout(layout)
-    lengths = limb_lengths(joints, layout)
-    seen = ~np.isnan(lengths).all(axis=0)
-    if not seen.all():
-        names = [f"{a}-{b}" for (a, b), ok in zip(layout.limbs, seen) if not ok]
-        log.warning("reference track: limbs never seen, left out of the limb error: %s", ", ".join(names))
-    out = np.full(lengths.shape[1], np.nan)
-    out[seen] = np.nanmedian(lengths[:, seen], axis=0)
-    return out
-
-
-def skeleton_height(joints: np.ndarray, layout: JointLayout | str = "body15") -> float:
-    """Standing height of a skeleton in pixels, from its median bone lengths.
-
-    nose-neck + neck-mid_hip + (hip-knee + knee-ankle, mean of the two legs). Bone lengths rather than the
-    bounding box, so the height does not change when the person crouches, leans or turns.
-
-    Args:
-        joints: [T, J, 2] pixel coordinates, NaN where missing.
-        layout: a layout with nose, neck, mid_hip, hips, knees and ankles (body15, body25).
-
-    Raises:
-        InputError: a bone needed for the height is missing in every frame.
-    """
-    layout = _layout(layout)
-    joints = _check_joints(joints, layout, "skeleton height")
-    names = [("nose", "neck"), ("neck", "mid_hip")] + [
-        (f"{s}_{a}", f"{s}_{b}") for s in ("l", "r") for a, b in (("hip", "knee"), ("knee", "ankle"))
-    ]
-    pairs = np.array([layout.indices(p) for p in names])
-    lengths = segment_lengths(joints, pairs)
-    if np.isnan(lengths).all(axis=0).any():
-        raise InputError("skeleton height: head, trunk or leg bones are missing in every frame")
-    bones = np.nanmedian(lengths, axis=0)  # [6]
-    return float(bones[0] + bones[1] + 0.5 * (bones[2] + bones[3] + bones[4] + bones[5]))
 
 
 def limb_error(
@@ -225,7 +155,7 @@ def limb_error(
         per_frame: [T] mean over limbs of ``|len - ref| / height * 100``, NaN where no limb is seen.
         errors: [T, L] the per-limb errors, NaN where a limb is not seen.
     """
-    layout = _layout(layout)
+    layout = as_layout(layout)
     lengths = limb_lengths(joints, layout)
     reference_lengths = np.asarray(reference_lengths, dtype=np.float64)
     if reference_lengths.shape != (lengths.shape[1],):
@@ -268,8 +198,8 @@ def foot_contacts(
     Returns:
         [T, 2] bool, columns in ``FEET`` order.
     """
-    layout = _layout(layout)
-    feet = _check_joints(joints, layout, "foot contacts")[:, layout.indices(FEET)]  # [T, 2, 2]
+    layout = as_layout(layout)
+    feet = check_joints(joints, layout, "foot contacts")[:, layout.indices(FEET)]  # [T, 2, 2]
     y = feet[..., 1]  # [T, 2]
     contact = np.zeros(y.shape, dtype=bool)
     for f in range(y.shape[1]):
@@ -296,7 +226,7 @@ def foot_slide(
             otherwise (always NaN in frame 0).
         contact: [T, 2] bool contact flags.
     """
-    layout = _layout(layout)
+    layout = as_layout(layout)
     contact = foot_contacts(joints, height, layout, window, height_tol, speed_tol)
     x = np.asarray(joints, dtype=np.float64)[:, layout.indices(FEET), 0]  # [T, 2]
     slide = np.full(x.shape, np.nan)
@@ -363,10 +293,10 @@ def pose_scores(
         Per-frame curves ``limb_error_pct``, ``foot_slide_pct``, ``jitter_pct``, ``outside_share`` and the
         summary of ``METRICS``'s first six keys; details hold the per-limb error.
     """
-    layout = _layout(layout)
+    layout = as_layout(layout)
     if not height > 0:
         raise InputError(f"pose scores: height must be positive, got {height}")
-    joints = _check_joints(joints, layout, "pose scores")
+    joints = check_joints(joints, layout, "pose scores")
     limb_frame, limb_all = limb_error(joints, reference_lengths, height, layout)
     slide, contact = foot_slide(joints, height, layout, window)
     acc = jitter(joints)

@@ -38,13 +38,12 @@ from clone.metrics import (
     FrameScorer,
     Scores,
     evaluate_track,
-    reference_limb_lengths,
-    skeleton_height,
 )
 from pose_io.atomic import atomic_dir
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clone.metrics import reference_limb_lengths, skeleton_height
 from pose_io import fill_gaps, read_track, smooth, write_track
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.video import write_pose_video
 from retarget.api import load_retargeter
 from retarget.baselines import global_scale_retarget

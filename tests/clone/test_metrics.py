@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from clone import metrics
-from pose_io import BODY15, InputError, PoseTrack
+from pose_io import BODY15, InputError, PoseTrack, measures
 
 # A standing body15 skeleton (x right, y down) whose bones are easy to add up.
 _STAND = {
@@ -28,16 +28,16 @@ def stand(frames: int = 10) -> np.ndarray:
 
 
 def test_skeleton_height_adds_bones():
-    assert metrics.skeleton_height(stand(), BODY15) == pytest.approx(HEIGHT)
+    assert measures.skeleton_height(stand(), BODY15) == pytest.approx(HEIGHT)
     # Bone lengths, not the box: a crouch in some frames does not change it.
     joints = stand(9)
     joints[:3, BODY15.indices(["r_knee", "l_knee"]), 0] += 30
-    assert metrics.skeleton_height(joints, "body15") == pytest.approx(HEIGHT)
+    assert measures.skeleton_height(joints, "body15") == pytest.approx(HEIGHT)
 
 
 def test_self_comparison_is_perfect():
     joints = stand(12)
-    ref = metrics.reference_limb_lengths(joints)
+    ref = measures.reference_limb_lengths(joints)
     scores = metrics.pose_scores(joints, (200, 240), ref, HEIGHT)
     assert scores.summary["limb_error_pct"] == 0.0
     assert scores.summary["jitter_pct"] == 0.0
@@ -50,7 +50,7 @@ def test_self_comparison_is_perfect():
 
 def test_uniform_scale_gives_known_limb_error():
     joints = stand(5)
-    ref = metrics.reference_limb_lengths(joints)
+    ref = measures.reference_limb_lengths(joints)
     scaled = (joints - joints[:, :1]) * 1.25 + joints[:, :1]  # 25 % larger around the nose
     per_frame, errors = metrics.limb_error(scaled, ref, HEIGHT)
     expected_per_limb = 0.25 * ref / HEIGHT * 100.0
@@ -64,7 +64,7 @@ def test_uniform_scale_gives_known_limb_error():
 
 def test_missing_limb_is_left_out_not_counted_as_error():
     joints = stand(4)
-    ref = metrics.reference_limb_lengths(joints)
+    ref = measures.reference_limb_lengths(joints)
     joints[1, BODY15.index("l_wrist")] = np.nan
     per_frame, errors = metrics.limb_error(joints, ref, HEIGHT)
     assert np.isnan(errors[1]).sum() == 1 and per_frame[1] == 0.0
@@ -82,7 +82,7 @@ def test_sliding_foot_gives_known_slide():
     assert np.isnan(slide[0]).all()
     np.testing.assert_allclose(slide[1:, metrics.FEET.index("r_ankle")], 2.0)
     np.testing.assert_allclose(slide[1:, metrics.FEET.index("l_ankle")], 0.0)
-    ref = metrics.reference_limb_lengths(stand())
+    ref = measures.reference_limb_lengths(stand())
     scores = metrics.pose_scores(joints, (400, 400), ref, HEIGHT, window=9)
     assert scores.summary["foot_slide_px"] == pytest.approx(1.0)  # mean over both ankles
     assert scores.summary["foot_slide_pct"] == pytest.approx(1.0 / HEIGHT * 100)
@@ -114,7 +114,7 @@ def test_constant_velocity_has_zero_jitter_and_a_kick_has_known_jitter():
     joints[10, 0] += [3.0, 4.0]  # one joint jumps out 5 px in one frame: accelerations 5, 10, 5
     acc = metrics.jitter(joints)
     np.testing.assert_allclose(acc[9:12, 0], [5.0, 10.0, 5.0], atol=1e-9)
-    ref = metrics.reference_limb_lengths(stand())
+    ref = measures.reference_limb_lengths(stand())
     scores = metrics.pose_scores(joints, (10_000, 10_000), ref, HEIGHT)
     assert scores.summary["jitter_pct"] == pytest.approx(20.0 / (18 * 15) / HEIGHT * 100)
 
@@ -125,7 +125,7 @@ def test_outside_share():
     joints[1, 0] = np.nan
     out = metrics.outside_frame(joints, (200, 240))
     assert np.nansum(out[0]) == 3 and np.isnan(out[1, 0])
-    scores = metrics.pose_scores(joints, (200, 240), metrics.reference_limb_lengths(stand()), HEIGHT)
+    scores = metrics.pose_scores(joints, (200, 240), measures.reference_limb_lengths(stand()), HEIGHT)
     np.testing.assert_allclose(scores.per_frame["outside_share"], [3 / 15, 0.0])
     assert scores.summary["outside_share"] == pytest.approx(3 / 29)
 
@@ -184,18 +184,32 @@ def test_evaluate_track_uses_fps_window_and_gt_layout():
     body25 = np.full((30, 25, 2), np.nan)
     body25[:, :15] = joints
     gt = PoseTrack(body25, np.isfinite(body25[..., 0]).astype(float), 30.0, (200, 240), "body25")
-    scores = metrics.evaluate_track(track, metrics.reference_limb_lengths(joints), HEIGHT, gt)
+    scores = metrics.evaluate_track(track, measures.reference_limb_lengths(joints), HEIGHT, gt)
     assert scores.summary["pose_mse"] == 0.0 and scores.summary["limb_error_pct"] == 0.0
     assert set(metrics.METRICS) >= set(scores.summary)
     assert metrics.contact_window(30.0) == 31 and metrics.contact_window(25.0) == 25
     with pytest.raises(InputError, match="frames"):
-        metrics.evaluate_track(track, metrics.reference_limb_lengths(joints), HEIGHT, gt.frames(0, 10))
+        metrics.evaluate_track(track, measures.reference_limb_lengths(joints), HEIGHT, gt.frames(0, 10))
 
 
 def test_limb_never_seen_in_reference_is_left_out():
     joints = stand(3)
     joints[:, BODY15.index("l_wrist")] = np.nan
-    ref = metrics.reference_limb_lengths(joints)
+    ref = measures.reference_limb_lengths(joints)
     assert np.isnan(ref[BODY15.limbs.index(("l_elbow", "l_wrist"))]) and np.isfinite(ref).sum() == 13
     per_frame, _ = metrics.limb_error(stand(3), ref, HEIGHT)
     np.testing.assert_allclose(per_frame, 0.0)
+
+
+def test_motion_spread_and_amplitude_ratio_known_values():
+    from pose_io.measures import amplitude_ratio, motion_spread
+
+    t = np.arange(100)
+    joints = np.zeros((100, 2, 2))
+    joints[:, 1, 0] = 3.0 * np.where(t % 2, 1.0, -1.0)  # joint 1 swings +-3 px about x = 0
+    spread = motion_spread(joints, height=10.0)
+    np.testing.assert_allclose(spread, [0.0, 0.3])
+    np.testing.assert_allclose(motion_spread(joints, height=10.0, root=1), [0.3, 0.0])
+    half = joints * 0.5
+    assert amplitude_ratio(half, 10.0, joints, 10.0) == pytest.approx(0.5)
+    assert amplitude_ratio(half, 5.0, joints, 10.0) == pytest.approx(1.0)  # a body half the size: same motion

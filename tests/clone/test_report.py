@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from clone import metrics, report
 from clone.cli.main import app
-from pose_io import BODY15, InputError, PoseTrack
+from pose_io import BODY15, InputError, PoseTrack, measures
 from pose_io.draw import draw_pose
 
 SIZE = 64  # reference frames are SIZE x SIZE
@@ -49,8 +49,8 @@ def make_methods(
 ) -> tuple[dict, report.DriverInfo, report.GroundTruth]:
     driver = walk(frames, 0.8)
     truth = walk(frames)
-    ref = metrics.reference_limb_lengths(truth.joints)
-    height = metrics.skeleton_height(truth.joints)
+    ref = measures.reference_limb_lengths(truth.joints)
+    height = measures.skeleton_height(truth.joints)
     at = report.still_indices(frames, 3)
     methods = {}
     for name, label, shift in (("global-scale", "Global scaling", 3.0), ("retarget", "Retargeted", 0.0)):
@@ -145,7 +145,7 @@ def test_report_files_numbers_and_page(tmp_path):
     assert rt["per_frame"]["foot_slide_pct"][0] is None  # no slide before the first frame
     gs = doc["methods"]["global-scale"]
     assert gs["summary"]["pose_rmse_pct"] == pytest.approx(
-        3.0 / metrics.skeleton_height(walk(12).joints) * 100
+        3.0 / measures.skeleton_height(walk(12).joints) * 100
     )
     assert all(len(v) == 12 for v in gs["per_frame"].values())
     assert doc["metrics"]["pose_mse"]["display_scale"] == 1000.0

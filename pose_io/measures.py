@@ -1,0 +1,156 @@
+"""Body measures of 2D pose tracks: one definition of each, used by retargeting, evaluation and reports.
+
+Small pure numpy functions on ``[T, J, 2]`` pixel arrays (NaN where a joint is missing) and a joint layout;
+every joint is found by name.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from pose_io.errors import InputError
+from pose_io.layouts import JointLayout, get_layout
+
+log = logging.getLogger(__name__)
+
+# The bones whose lengths add up to a standing height: head, trunk, and the two legs (averaged).
+_HEIGHT_BONES: tuple[tuple[str, str], ...] = (("nose", "neck"), ("neck", "mid_hip")) + tuple(
+    (f"{s}_{a}", f"{s}_{b}") for s in ("l", "r") for a, b in (("hip", "knee"), ("knee", "ankle"))
+)
+
+
+def as_layout(layout: JointLayout | str) -> JointLayout:
+    """A layout from its name, or the layout itself."""
+    return get_layout(layout) if isinstance(layout, str) else layout
+
+
+def check_joints(joints: np.ndarray, layout: JointLayout, what: str) -> np.ndarray:
+    """``joints`` as float64 ``[T, J, 2]`` for ``layout``; InputError naming ``what`` otherwise."""
+    joints = np.asarray(joints, dtype=np.float64)
+    if joints.ndim != 3 or joints.shape[1:] != (len(layout), 2):
+        raise InputError(f"{what}: expected [T, {len(layout)}, 2] joints for {layout.name}, got {joints.shape}")
+    return joints
+
+
+def segment_lengths(joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Lengths of joint-to-joint segments.
+
+    Args:
+        joints: [..., J, 2] pixel coordinates, NaN where missing.
+        pairs: [L, 2] joint index pairs.
+
+    Returns:
+        [..., L] float64 lengths, NaN where either end is missing.
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    return np.linalg.norm(joints[..., pairs[:, 0], :] - joints[..., pairs[:, 1], :], axis=-1)
+
+
+def limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
+    """[T, L] length of every limb of ``layout`` (in ``layout.limbs`` order) in every frame of [T, J, 2] joints."""
+    layout = as_layout(layout)
+    return segment_lengths(check_joints(joints, layout, "limb lengths"), layout.limb_indices)
+
+
+def reference_limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
+    """[L] a person's length of every limb: the median over the frames of [T, J, 2] joints.
+
+    A limb missing in every frame gets NaN (and is then left out of limb errors), with a warning.
+    """
+    layout = as_layout(layout)
+    lengths = limb_lengths(joints, layout)
+    seen = ~np.isnan(lengths).all(axis=0)
+    if not seen.all():
+        names = [f"{a}-{b}" for (a, b), ok in zip(layout.limbs, seen) if not ok]
+        log.warning("limbs never seen, left out of the limb error: %s", ", ".join(names))
+    out = np.full(lengths.shape[1], np.nan)
+    out[seen] = np.nanmedian(lengths[:, seen], axis=0)
+    return out
+
+
+def skeleton_heights(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
+    """Standing height of each window of a batch, from its median bone lengths.
+
+    nose-neck + neck-mid_hip + (hip-knee + knee-ankle, mean of the two legs). Bone lengths rather than the
+    bounding box, so the height does not change when the person crouches, leans or turns.
+
+    Args:
+        joints: [N, T, J, 2] pixel coordinates, NaN where missing.
+        layout: a layout with nose, neck, mid_hip, hips, knees and ankles (body15, body25).
+
+    Returns:
+        [N] float64 heights, NaN for a window where a bone is missing in every frame.
+    """
+    layout = as_layout(layout)
+    pairs = np.array([layout.indices(p) for p in _HEIGHT_BONES])
+    lengths = segment_lengths(joints, pairs)  # [N, T, 6]
+    seen = ~np.isnan(lengths).all(axis=1)  # [N, 6]
+    bones = np.full(lengths.shape[::2], np.nan)  # [N, 6]
+    for n in range(len(lengths)):
+        if seen[n].all():
+            bones[n] = np.nanmedian(lengths[n], axis=0)
+    return bones[:, 0] + bones[:, 1] + 0.5 * bones[:, 2:].sum(axis=1)
+
+
+def skeleton_height(joints: np.ndarray, layout: JointLayout | str = "body15") -> float:
+    """Standing height of one track in pixels (see :func:`skeleton_heights`).
+
+    Args:
+        joints: [T, J, 2] pixel coordinates, NaN where missing.
+        layout: a layout with nose, neck, mid_hip, hips, knees and ankles.
+
+    Raises:
+        InputError: a bone needed for the height is missing in every frame.
+    """
+    layout = as_layout(layout)
+    joints = check_joints(joints, layout, "skeleton height")
+    height = float(skeleton_heights(joints[None], layout)[0])
+    if not np.isfinite(height) or height <= 0:
+        raise InputError("skeleton height: head, trunk or leg bones are missing in every frame")
+    return height
+
+
+def motion_spread(joints: np.ndarray, height: float, root: int | None = None) -> np.ndarray:
+    """Range of motion of every joint: the RMS distance from its mean position, in units of ``height``.
+
+    Args:
+        joints: [T, J, 2] pixels, NaN where missing.
+        height: body height in pixels (e.g. :func:`skeleton_height`).
+        root: index of a joint to subtract from every joint first (the body's own motion without its
+            travel), or None to keep the travel.
+
+    Returns:
+        [J] float64 spreads (NaN for a joint never seen; 0 for the root itself when subtracted).
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    if root is not None:
+        joints = joints - joints[:, root : root + 1]
+    seen = ~np.isnan(joints[..., 0]).all(axis=0)
+    out = np.full(joints.shape[1], np.nan)
+    if seen.any():
+        centred = joints[:, seen] - np.nanmean(joints[:, seen], axis=0)
+        out[seen] = np.sqrt(np.nanmean((centred**2).sum(axis=-1), axis=0)) / height
+    return out
+
+
+def amplitude_ratio(joints: np.ndarray, height: float, like: np.ndarray, like_height: float,
+                    root: int | None = None) -> float:
+    """How much ``joints`` move compared with ``like``: the ratio of their summed :func:`motion_spread`.
+
+    1 = the same range of motion (relative to each body's height); below 1 = damped, above = exaggerated.
+
+    Args:
+        joints: [T, J, 2] pixels of the track measured.
+        height: its body height in pixels.
+        like: [T', J, 2] pixels of the track compared with (the driver, or the ground truth).
+        like_height: its body height in pixels.
+        root: see :func:`motion_spread`.
+    """
+    mine = motion_spread(joints, height, root)
+    theirs = motion_spread(like, like_height, root)
+    both = ~np.isnan(mine) & ~np.isnan(theirs)
+    total = float(theirs[both].sum())
+    return float(mine[both].sum()) / total if total > 0 else float("nan")
