@@ -44,6 +44,7 @@ import torch
 
 from pose_io.atomic import atomic_dir, check_new_output
 from pose_io.errors import InputError
+from pose_io.measures import amplitude_ratio
 from pose_io.track import PoseTrack
 from retarget.baselines import global_scale_retarget, limb_scale_retarget
 from retarget.preprocess import ROOT_INDEX, body15_track, joints_to_channels, prepare_track
@@ -56,7 +57,7 @@ log = logging.getLogger(__name__)
 Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
 Progress = Callable[[int, int], None]
 
-METRICS: tuple[str, ...] = ("mse_x1e3", "rmse_pct", "pck_0.05", "pck_0.1")
+METRICS: tuple[str, ...] = ("mse_x1e3", "rmse_pct", "pck_0.05", "pck_0.1", "amplitude")
 ALIGNMENTS: tuple[str, ...] = ("pose", "with_root", "placed")
 _WORLD_ROOT = joint_index("mid_hip")
 
@@ -147,7 +148,8 @@ def pose_errors(pred: np.ndarray, truth: np.ndarray, height: float) -> dict[str,
     Returns:
         ``mse_x1e3``: mean over frames, joints and coordinates of the squared height-normalised difference,
         x 1000; ``rmse_pct``: root mean squared joint distance in % of the height; ``pck_0.05``, ``pck_0.1``:
-        share of joints closer than that share of the height.
+        share of joints closer than that share of the height; ``amplitude``: the prediction's range of
+        motion over the truth's (:func:`pose_io.measures.amplitude_ratio`; 1 = neither damped nor exaggerated).
     """
     e = (np.asarray(pred, np.float64) - np.asarray(truth, np.float64)) / height  # [T, J, 2]
     dist = np.linalg.norm(e, axis=-1)  # [T, J]
@@ -156,6 +158,7 @@ def pose_errors(pred: np.ndarray, truth: np.ndarray, height: float) -> dict[str,
         "rmse_pct": float(np.sqrt(np.mean(dist**2)) * 100),
         "pck_0.05": float(np.mean(dist < 0.05)),
         "pck_0.1": float(np.mean(dist < 0.1)),
+        "amplitude": amplitude_ratio(pred, height, truth, height),
     }
 
 
@@ -514,18 +517,23 @@ def markdown_report(doc: Mapping) -> str:
     """eval.md: one table per source of cases (method rows, metric columns), the silhouettes, the notes."""
     cfg = doc["config"]
     lines = ["# Retargeting evaluation", ""]
-    head = ("| method | pose MSE ×10³ | pose RMSE % | pose PCK@.05 | pose PCK@.1 | with root MSE ×10³ | "
-            "with root PCK@.1 | placed MSE ×10³ | placed PCK@.1 |")  # fmt: skip
+    head = ("| method | pose MSE ×10³ | pose RMSE % | pose PCK@.05 | pose PCK@.1 | range of motion | "
+            "with root MSE ×10³ | with root PCK@.1 | placed MSE ×10³ | placed PCK@.1 |")  # fmt: skip
     for source, rows in doc["results"].items():
-        lines += [f"## {source}: {cfg['pairs']} cases of {cfg['length']} frames", "", head, "|---" * 9 + "|"]
+        lines += [f"## {source}: {cfg['pairs']} cases of {cfg['length']} frames", "", head, "|---" * 10 + "|"]
         for name, r in rows.items():
             p, w, pl = r["pose"], r["with_root"], r["placed"]
             lines.append(
                 f"| {name} | {p['mse_x1e3']:.2f} ± {p['mse_x1e3_se']:.2f} | {p['rmse_pct']:.1f} | "
-                f"{p['pck_0.05']:.3f} | {p['pck_0.1']:.3f} | {w['mse_x1e3']:.2f} ± {w['mse_x1e3_se']:.2f} | "
+                f"{p['pck_0.05']:.3f} | {p['pck_0.1']:.3f} | {p['amplitude']:.2f} | "
+                f"{w['mse_x1e3']:.2f} ± {w['mse_x1e3_se']:.2f} | "
                 f"{w['pck_0.1']:.3f} | {pl['mse_x1e3']:.2f} | {pl['pck_0.1']:.3f} |"
             )
         lines.append("")
+    if doc.get("real_pairs"):
+        from retarget.evaluate_real import markdown_rows
+
+        lines += ["## Real tracks (no ground truth)", "", *markdown_rows(doc["real_pairs"]), ""]
     if doc["silhouettes"]:
         lines += ["## Mean silhouette coefficients of the codes", "",
                   "| network | motion codes (by motion) | skeleton codes (by character) | view codes (by view) |",
@@ -556,6 +564,9 @@ def _notes(doc: Mapping) -> list[str]:
          "paper's numbers are about the pose). with root: all 15 joints, after removing the one translation per "
          "case that best aligns prediction and truth (the root trajectory counts, where in the frame the "
          "reference stood does not). placed: the output as it lands in the reference's frame."),
+        ("Range of motion: the summed RMS distance of the joints from their mean positions (MidHip removed), "
+         "in units of the body's height, of the output over the truth's (1 = neither damped nor exaggerated). "
+         "On real tracks it is the output's over the driver's."),
     ]
     for name, method in doc["methods"].items():
         what = method["description"]
@@ -579,6 +590,7 @@ def run_eval(
     compare: Mapping[str, str | Path] | None = None,
     official: str | Path | None = None,
     bvh: Sequence[str | Path] = (),
+    real: Mapping[str, PoseTrack] | None = None,
     config: EvalConfig = EvalConfig(),
     fps: float = 30.0,
     device: str = "cpu",
@@ -596,6 +608,8 @@ def run_eval(
         official: folder with the authors' ``pretrained_{full,skeleton,view}.pth`` and statistics; a row for
             each file found.
         bvh: extra mocap files, replayed on the split's characters as a second source of cases.
+        real: real tracks by name; every ordered pair is retargeted by every network and baseline and
+            measured without ground truth (:mod:`retarget.evaluate_real`).
         config: what is evaluated.
         fps: the world's frame rate.
         device: where the networks run.
@@ -673,6 +687,11 @@ def run_eval(
     for source_name, motions in sources.items():
         results[source_name] = evaluate(split, methods, config, motions, fps, tick)
         done += config.pairs
+    real_results = {}
+    if real:
+        from retarget.evaluate_real import real_pair_results
+
+        real_results = real_pair_results(real, {n: m for n, m in methods.items() if n in nets or n in BASELINES})
     silhouettes, plots = {}, {}
     for name, net in nets.items():
         scores, codes, labels = code_silhouettes(net, split, config, fps)
@@ -691,6 +710,7 @@ def run_eval(
         "extra_mocap": [str(p) for p in bvh],
         "methods": info,
         "results": results,
+        "real_pairs": real_results,
         "silhouettes": silhouettes,
         "remarks": remarks,
     }

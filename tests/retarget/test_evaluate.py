@@ -72,7 +72,8 @@ def tiny_weights(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_identical_poses_score_perfectly() -> None:
     joints = np.random.default_rng(0).uniform(0, 100, (10, 15, 2))
-    assert pose_errors(joints, joints, 100.0) == {"mse_x1e3": 0.0, "rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0}
+    assert pose_errors(joints, joints, 100.0) == {"mse_x1e3": 0.0, "rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0,
+                                                   "amplitude": 1.0}
     for scores in case_scores(joints, joints, 100.0).values():
         assert scores["mse_x1e3"] == 0.0 and scores["pck_0.05"] == 1.0
 

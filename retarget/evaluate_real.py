@@ -1,0 +1,86 @@
+"""Retargeting between real pose tracks, where no ground truth exists: what can still be measured.
+
+For every ordered pair (A, B) of real tracks, A's motion is moved onto B by each method and the output is
+compared with what it should keep:
+
+* range of motion (:func:`pose_io.measures.amplitude_ratio`, root removed): the output's joints should swing
+  as far, relative to the output body's height, as the driver's do relative to the driver's height. Below 1
+  the motion is damped. The driver is measured after the same temporal smoothing the output gets
+  (``sigma``), so detection jitter, which no retargeting should copy, does not count as motion.
+* the highest a wrist gets above the neck, in % of height (driver vs output): the measure that shows a
+  damped arm raise.
+* limb-length error against B's own limb lengths, in % of B's height (0 = B's proportions kept).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from itertools import permutations
+
+import numpy as np
+
+from pose_io.measures import amplitude_ratio, motion_spread, reference_limb_lengths, skeleton_height
+from pose_io.track import PoseTrack
+from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15, smooth
+
+Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
+
+
+def wrist_rise(joints: np.ndarray, height: float) -> float:
+    """Highest a wrist gets above the neck over a track, in % of ``height`` (image y grows downwards).
+
+    Args:
+        joints: [T, 15, 2] body15 pixels.
+        height: body height in pixels.
+    """
+    neck = joints[:, LAYOUT.index("neck"), 1]
+    wrists = joints[:, LAYOUT.indices(("r_wrist", "l_wrist")), 1]  # [T, 2]
+    return float(np.nanmax(neck[:, None] - wrists) / height * 100)
+
+
+def pair_scores(
+    motion: PoseTrack, reference: PoseTrack, output: PoseTrack, sigma: float = 2.0
+) -> dict[str, float | dict]:
+    """What retargeting ``motion`` onto ``reference`` kept, measured on ``output`` (see the module docstring)."""
+    drv = smooth(filled_body15(motion, "motion track"), sigma)
+    ref = filled_body15(reference, "reference track")
+    out = np.asarray(output.joints, dtype=np.float64)
+    h_drv, h_ref, h_out = (skeleton_height(j, LAYOUT) for j in (drv, ref, out))
+    per_joint = motion_spread(out, h_out, ROOT_INDEX) / motion_spread(drv, h_drv, ROOT_INDEX)
+    limbs = np.abs(reference_limb_lengths(out, LAYOUT) - reference_limb_lengths(ref, LAYOUT)) / h_ref * 100
+    return {
+        "amplitude": amplitude_ratio(out, h_out, drv, h_drv, ROOT_INDEX),
+        "amplitude_per_joint": {
+            name: round(float(r), 4) for name, r in zip(LAYOUT.joints, per_joint) if name != LAYOUT.joints[ROOT_INDEX]
+        },
+        "wrist_rise_pct": wrist_rise(out, h_out),
+        "driver_wrist_rise_pct": wrist_rise(drv, h_drv),
+        "limb_error_pct": float(np.nanmean(limbs)),
+    }
+
+
+def real_pair_results(
+    tracks: Mapping[str, PoseTrack], methods: Mapping[str, Method]
+) -> dict[str, dict[str, dict[str, float | dict]]]:
+    """Scores of every method on every ordered pair of ``tracks``: ``"A -> B" -> method -> scores``."""
+    results: dict[str, dict[str, dict[str, float | dict]]] = {}
+    for (a, motion), (b, reference) in permutations(tracks.items(), 2):
+        results[f"{a} -> {b}"] = {
+            name: pair_scores(motion, reference, method(motion, reference)) for name, method in methods.items()
+        }
+    return results
+
+
+def markdown_rows(results: Mapping[str, Mapping[str, Mapping]]) -> list[str]:
+    """A markdown table of :func:`real_pair_results`."""
+    lines = [
+        "| pair | method | range of motion vs driver | wrist above neck % (driver) | limb error % of B |",
+        "|---|---|---|---|---|",
+    ]
+    for pair, rows in results.items():
+        for name, r in rows.items():
+            lines.append(
+                f"| {pair} | {name} | {r['amplitude']:.2f} | {r['wrist_rise_pct']:.1f} "
+                f"({r['driver_wrist_rise_pct']:.1f}) | {r['limb_error_pct']:.1f} |"
+            )
+    return lines
