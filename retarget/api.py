@@ -39,6 +39,7 @@ from retarget.preprocess import (
     prepare_track,
     smooth,
     to_body15,
+    track_scale,
 )
 from retarget.runtime import resolve_device
 
@@ -84,12 +85,15 @@ class ReferenceCodes:
         view: [Cv] float32 view code, or None for a network without a view encoder.
         placement: median pose height, root x and ground line, in the reference's pixels.
         image_size: (width, height) of the reference's frames.
+        scale: factor from the reference's pixels to the network canvas (None in files written before it
+            was stored: then the image-height rule).
     """
 
     body: np.ndarray | None
     view: np.ndarray | None
     placement: Placement
     image_size: tuple[int, int]
+    scale: float | None = None
 
     def to_dict(self) -> dict[str, np.ndarray]:
         """Plain arrays (float32 codes, float64 placement, int64 size) for storing in other files."""
@@ -99,6 +103,8 @@ class ReferenceCodes:
             ),
             "image_size": np.array(self.image_size, dtype=np.int64),
         }
+        if self.scale is not None:
+            out["scale"] = np.array(self.scale, dtype=np.float64)
         for name, code in (("body", self.body), ("view", self.view)):
             if code is not None:
                 out[name] = np.asarray(code, dtype=np.float32).copy()
@@ -118,11 +124,16 @@ class ReferenceCodes:
                 k: np.asarray(data[k], dtype=np.float32).reshape(-1) if data.get(k) is not None else None
                 for k in ("body", "view")
             }
+            scale = float(np.asarray(data["scale"]).reshape(())) if data.get("scale") is not None else None
         except (KeyError, ValueError, TypeError) as exc:
             raise InputError(f"reference codes: missing or malformed entry ({exc})") from None
         if not np.isfinite(placement).all() or (size <= 0).any():
             raise InputError("reference codes: invalid placement or image size")
-        return cls(codes["body"], codes["view"], Placement(*map(float, placement)), (int(size[0]), int(size[1])))
+        if scale is not None and not (np.isfinite(scale) and scale > 0):
+            raise InputError("reference codes: invalid canvas scale")
+        return cls(
+            codes["body"], codes["view"], Placement(*map(float, placement)), (int(size[0]), int(size[1])), scale
+        )
 
 
 @dataclass(eq=False)
@@ -180,7 +191,8 @@ class Retargeter:
         if self.model.view_encoder is not None:
             view_code = self._static_code(x if view is None else self._input(view, view_name), "view")
         placement = placement_of(to_body15(track, name).joints, name)
-        return ReferenceCodes(body, view_code, placement, track.image_size)
+        scale = track_scale(track, self.preprocess, name)
+        return ReferenceCodes(body, view_code, placement, track.image_size, scale)
 
     @torch.inference_mode()
     def _static_code(self, x: torch.Tensor, which: str) -> np.ndarray:
@@ -221,9 +233,19 @@ class Retargeter:
         x = self._input(motion, name)
         y = self._decode_track(x, reference)  # [1, 30, T]
         joints = channels_to_joints(y.double().cpu(), self.stats)[0].numpy()  # [T, 15, 2] canvas
-        joints = joints / canvas_scale(reference.image_size, self.preprocess)  # reference pixels
+        joints = joints / self._reference_scale(reference)  # reference pixels
         joints = place(smooth(joints, self.preprocess.output_sigma), reference.placement)
         return body15_track(joints, motion.fps, reference.image_size)
+
+    def _reference_scale(self, reference: ReferenceCodes) -> float:
+        if reference.scale is not None:
+            return reference.scale
+        if self.preprocess.body_height > 0:
+            raise InputError(
+                "reference codes: written by an older clone2d without the reference's scale; recompute them"
+                " (run `clone train-ref` again)"
+            )
+        return canvas_scale(reference.image_size, self.preprocess)
 
     def _check_reference(self, reference: ReferenceCodes) -> None:
         for name, code, dim in (

@@ -4,7 +4,9 @@ For two triples (m1, c1, v1), (m2, c2, v2) the network encodes both, decodes all
 motion, skeleton and view codes and compares each with the ground-truth window of that combination
 (reconstruction for the two originals, cross reconstruction for the other six). A triplet loss pulls
 the codes of windows sharing a motion (skeleton, view) together and pushes the other triple's away, and
-a foot-velocity loss matches the global velocity of the ankles.
+a foot-velocity loss matches the global velocity of the ankles. Beyond the paper, a trajectory loss
+compares the root path integrated over the window (up to one translation), which the per-frame velocity
+error lets drift.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import torch.nn.functional as F
 
 from retarget.augment import COMBOS, MOTION, SKELETON, VIEW, combo_index
 from retarget.model import RetargetNet
-from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints
+from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints, velocity_channels
 
 
 @dataclass(frozen=True)
@@ -30,6 +32,7 @@ class LossConfig:
         triplet_margin: its margin.
         triplet_weight: its weight.
         foot_weight: weight of the foot-velocity loss (0 = off).
+        trajectory_weight: weight of the integrated root-trajectory loss (0 = off; not in the paper).
     """
 
     cross: bool = True
@@ -37,6 +40,7 @@ class LossConfig:
     triplet_margin: float = 0.3
     triplet_weight: float = 0.1
     foot_weight: float = 0.5
+    trajectory_weight: float = 0.0
 
 
 # Ablations of the paper's objective, by name.
@@ -64,6 +68,18 @@ def foot_velocity(x: torch.Tensor, stats: NormStats, min_scale: float = 1.0) -> 
     joints = channels_to_joints(x, stats)[:, :, LAYOUT.indices(FEET)]  # [B, T, 2, 2]
     scale = torch.tensor(np.maximum(stats.velocity_std, min_scale), dtype=x.dtype, device=x.device)
     return (joints[:, 1:] - joints[:, :-1]) / scale
+
+
+def trajectory_error(out: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
+    """Squared error of the integrated root path, one translation removed: [B, 30, T] x2 -> [B].
+
+    The velocity channels are in units of the root-velocity std; their running sum is the root path in
+    those units. The mean over the window is subtracted (the path may be placed anywhere) and the result
+    is divided by ``T`` so that windows of any length weigh alike.
+    """
+    drift = torch.cumsum(velocity_channels(out) - velocity_channels(truth), dim=-1)  # [B, 2, T]
+    drift = drift - drift.mean(dim=-1, keepdim=True)
+    return (drift**2).mean(dim=(1, 2)) / out.shape[-1]
 
 
 def used_combos(model: RetargetNet, cross: bool) -> list[int]:
@@ -128,6 +144,9 @@ def objective(
         flat_out, flat_truth = out.flatten(0, 1), truth.flatten(0, 1)
         foot = ((foot_velocity(flat_out, stats) - foot_velocity(flat_truth, stats)) ** 2)
         losses["foot"] = config.foot_weight * foot.reshape(len(combos), -1).mean(dim=1).sum()
+    if config.trajectory_weight > 0:
+        path = trajectory_error(out.flatten(0, 1), truth.flatten(0, 1)).reshape(len(combos), -1)
+        losses["trajectory"] = config.trajectory_weight * path.mean(dim=1).sum()
     if config.triplet:
         losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
     losses["total"] = sum(losses.values())
@@ -170,5 +189,7 @@ def self_reconstruction(
     if config.foot_weight > 0:
         foot = (foot_velocity(out, stats) - foot_velocity(targets, stats)) ** 2
         losses["foot"] = config.foot_weight * foot.mean()
+    if config.trajectory_weight > 0:
+        losses["trajectory"] = config.trajectory_weight * trajectory_error(out, targets).mean()
     losses["total"] = sum(losses.values())
     return losses

@@ -27,6 +27,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, get_layout, require_convertible
+from pose_io.measures import skeleton_height
 from pose_io.track import PoseTrack
 
 LAYOUT = BODY15
@@ -50,11 +51,16 @@ class PreprocessConfig:
             ``canvas_height / image_height``.
         input_sigma: Gaussian smoothing over time (frames) of input tracks after gap filling (0 = off).
         output_sigma: Gaussian smoothing over time of retargeted tracks (0 = off).
+        body_height: 0 = scale by the image height (the authors' rule); > 0 = scale every track so that
+            its skeleton height (:func:`pose_io.measures.skeleton_height`) is this many canvas pixels.
+            The second makes the result independent of the image size, which OpenPose JSON does not
+            store and which is then only a guess.
     """
 
     canvas_height: float = 512.0
     input_sigma: float = 2.0
     output_sigma: float = 2.0
+    body_height: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,8 +212,18 @@ def smooth(joints: np.ndarray, sigma: float) -> np.ndarray:
     return gaussian_filter1d(joints, sigma=sigma, axis=0, mode="reflect")
 
 
-def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig) -> float:
-    """Factor from a track's pixels to the network canvas."""
+def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig, joints: np.ndarray | None = None) -> float:
+    """Factor from a track's pixels to the network canvas.
+
+    Args:
+        image_size: (width, height) of the track's frames.
+        config: preprocessing settings.
+        joints: [T, 15, 2] body15 pixels (NaN allowed); needed when ``config.body_height`` > 0.
+    """
+    if config.body_height > 0:
+        if joints is None:
+            raise ValueError("body-height normalisation needs the joints")
+        return config.body_height / skeleton_height(joints, LAYOUT)
     return config.canvas_height / float(image_size[1])
 
 
@@ -252,7 +268,17 @@ def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track
         InputError: see :func:`filled_body15`.
     """
     filled = filled_body15(track, name)
-    return smooth(filled, config.input_sigma) * canvas_scale(track.image_size, config)
+    return smooth(filled, config.input_sigma) * track_scale(track, config, name)
+
+
+def track_scale(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> float:
+    """Factor :func:`prepare_track` scales ``track`` by (its pixels -> the network canvas)."""
+    if config.body_height <= 0:
+        return canvas_scale(track.image_size, config)
+    try:
+        return canvas_scale(track.image_size, config, to_body15(track, name).joints)
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
 
 
 def body15_track(joints: np.ndarray, fps: float, image_size: tuple[int, int]) -> PoseTrack:

@@ -15,6 +15,7 @@ The split interface used here (the motion world provides it)::
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import logging
 import math
@@ -29,12 +30,21 @@ import torch
 from torch.utils.data import DataLoader, Dataset
 
 from pose_io.errors import InputError
+from pose_io.measures import skeleton_heights
 from pose_io.track import PoseTrack
 from retarget.augment import COMBOS, AugmentConfig, augment_targets, corrupt_inputs
-from retarget.checkpoint import load_checkpoint, save_checkpoint
+from retarget.checkpoint import RetargetWeights, load_checkpoint, load_weights, save_checkpoint
 from retarget.losses import LossConfig, objective, self_reconstruction
 from retarget.model import RetargetNet, variant_config
-from retarget.preprocess import NormStats, PreprocessConfig, joints_to_channels, prepare_track, row_statistics
+from retarget.preprocess import (
+    LAYOUT,
+    LOCAL_INDEX,
+    NormStats,
+    PreprocessConfig,
+    joints_to_channels,
+    prepare_track,
+    row_statistics,
+)
 from retarget.runtime import resolve_device
 
 log = logging.getLogger(__name__)
@@ -75,6 +85,9 @@ class TrainConfig:
         augment: augmentation settings.
         loss: objective settings (see :data:`retarget.losses.ABLATIONS`).
         preprocess: canvas and smoothing used at inference (stored in the checkpoint).
+        body_normalise: bring every character to one skeleton height in training, and every track to it at
+            inference, instead of scaling by the image height (the target height is that of the initial
+            weights' mean pose, or the median character's; stored in the checkpoint's preprocessing).
     """
 
     variant: str = "full"
@@ -92,6 +105,7 @@ class TrainConfig:
     augment: AugmentConfig = field(default_factory=AugmentConfig)
     loss: LossConfig = field(default_factory=LossConfig)
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    body_normalise: bool = True
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -138,9 +152,12 @@ class CrossSamples(Dataset):
         variant: network variant.
         size: samples per epoch.
         seed: seed.
+        scales: optional [C] factor per character (body-height normalisation), applied about the origin.
     """
 
-    def __init__(self, split: WorldSplit, length: int, variant: str, size: int, seed: int) -> None:
+    def __init__(
+        self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None
+    ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
         config = variant_config(variant)
@@ -148,6 +165,7 @@ class CrossSamples(Dataset):
         self.length = length
         self.size = size
         self.seed = seed
+        self.scales = scales
         self.epoch = 0
         self.vary_character = config.body_channels is not None and split.num_characters > 1
         self.vary_view = config.view_channels is not None and split.num_views > 1
@@ -172,7 +190,10 @@ class CrossSamples(Dataset):
             key = (int(motions[m]), int(chars[c]), int(views[v]))
             if key not in cache:
                 camera = np.random.default_rng(int(view_seeds[v]))
-                cache[key] = np.asarray(self.split.window(*key, length=self.length, offset=0, rng=camera), np.float32)
+                window = self.split.window(*key, length=self.length, offset=0, rng=camera)
+                if self.scales is not None:
+                    window = window * self.scales[key[1]]
+                cache[key] = np.asarray(window, np.float32)
             windows.append(cache[key])
         ids = np.stack([motions, chars, views], axis=1).astype(np.int64)  # [2, 3]
         return {"windows": np.stack(windows), "ids": ids}
@@ -187,17 +208,45 @@ def _pair(rng: np.random.Generator, n: int, distinct: bool) -> np.ndarray:
     return np.repeat(rng.integers(n), 2)
 
 
-def split_statistics(split: WorldSplit, length: int, count: int, seed: int) -> NormStats:
-    """Normalisation statistics of ``count`` random windows of a split."""
+def split_statistics(
+    split: WorldSplit, length: int, count: int, seed: int, scales: np.ndarray | None = None
+) -> NormStats:
+    """Normalisation statistics of ``count`` random windows of a split (each scaled by its character's factor)."""
     rng = np.random.default_rng([seed, 7919])
-    windows = [
-        split.window(
-            int(rng.integers(split.num_motions)), int(rng.integers(split.num_characters)),
-            int(rng.integers(split.num_views)), length=length, offset=0, rng=rng,
-        )
-        for _ in range(count)
-    ]
+    windows = []
+    for _ in range(count):
+        m, c, v = (int(rng.integers(n)) for n in (split.num_motions, split.num_characters, split.num_views))
+        window = split.window(m, c, v, length=length, offset=0, rng=rng)
+        windows.append(window * (1.0 if scales is None else scales[c]))
     return row_statistics(np.stack(windows))
+
+
+def character_heights(split: WorldSplit, length: int, per_character: int, seed: int) -> np.ndarray:
+    """[C] median skeleton height (canvas pixels) of each character over ``per_character`` random windows."""
+    rng = np.random.default_rng([seed, 3571])
+    heights = np.empty(split.num_characters)
+    for c in range(split.num_characters):
+        windows = np.stack([
+            split.window(int(rng.integers(split.num_motions)), c, int(rng.integers(split.num_views)),
+                         length=length, offset=0, rng=rng)
+            for _ in range(per_character)
+        ])  # fmt: skip
+        heights[c] = np.nanmedian(skeleton_heights(windows, LAYOUT))
+    return heights
+
+
+def mean_pose_height(stats: NormStats) -> float:
+    """Skeleton height of the mean pose that normalisation statistics describe (canvas pixels)."""
+    joints = np.zeros((1, 1, len(LAYOUT), 2))
+    joints[0, 0, list(LOCAL_INDEX)] = stats.mean[:-1]
+    return float(skeleton_heights(joints, LAYOUT)[0])
+
+
+def body_scales(split: WorldSplit, config: TrainConfig, target: float) -> np.ndarray | None:
+    """[C] factor bringing each character of ``split`` to ``target`` skeleton height (None: no normalisation)."""
+    if not config.body_normalise:
+        return None
+    return target / character_heights(split, config.window, 8, config.seed)
 
 
 def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: PreprocessConfig) -> np.ndarray:
@@ -212,19 +261,25 @@ def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: Preproces
     return np.asarray(out, dtype=np.float32).reshape(-1, length, 15, 2)
 
 
-def read_real_tracks(folder: str | Path) -> list[PoseTrack]:
-    """Every OpenPose folder in ``folder`` (or ``folder`` itself when it holds the JSON files)."""
+def read_real_tracks(folder: str | Path, named: bool = False) -> list:
+    """Every OpenPose folder in ``folder`` (or ``folder`` itself when it holds the JSON files).
+
+    Returns:
+        the tracks, or ``(folder name, track)`` pairs with ``named``.
+    """
     from pose_io.readers import read_track
 
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(f"{folder}: not a folder of OpenPose folders")
     if any(folder.glob("*_keypoints.json")):
-        return [read_track(folder, fmt="openpose")]
-    subfolders = sorted(p for p in folder.iterdir() if p.is_dir() and any(p.glob("*_keypoints.json")))
+        subfolders = [folder]
+    else:
+        subfolders = sorted(p for p in folder.iterdir() if p.is_dir() and any(p.glob("*_keypoints.json")))
     if not subfolders:
         raise InputError(f"{folder}: no OpenPose folders (*_keypoints.json) in it")
-    return [read_track(p, fmt="openpose") for p in subfolders]
+    tracks = [read_track(p, fmt="openpose") for p in subfolders]
+    return [(p.name, t) for p, t in zip(subfolders, tracks)] if named else tracks
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -350,6 +405,7 @@ def fit(
     resume: bool = False,
     num_workers: int = 0,
     progress: bool = False,
+    init: RetargetWeights | None = None,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
 
@@ -365,6 +421,8 @@ def fit(
         resume: continue the run stored in ``out``.
         num_workers: data-loader worker processes.
         progress: show a rich progress bar.
+        init: weights to start from (ours or the authors'; their statistics are kept, since the
+            weights are tied to them); ignored with ``resume``.
 
     Returns:
         A :class:`TrainSummary`.
@@ -381,11 +439,27 @@ def fit(
     if resume:
         state = _resume_state(out, config)
         model, stats, training = state["model"], state["stats"], state["training"]
+        preprocess = state["preprocess"]
+        init_from = training.get("init")
+        scales = body_scales(train_split, config, preprocess.body_height)
     else:
         _require_new(out)
         torch.manual_seed(config.seed)
-        model = RetargetNet(variant_config(config.variant))
-        stats = split_statistics(train_split, config.window, config.stats_windows, config.seed)
+        if init is not None:
+            if init.variant != config.variant:
+                raise InputError(f"{init.path}: a {init.variant} network; this run trains a {config.variant} one")
+            model, stats, init_from = copy.deepcopy(init.model), init.stats, str(init.path)
+            target = mean_pose_height(stats)
+        else:
+            model, stats, init_from = RetargetNet(variant_config(config.variant)), None, None
+            target = float(np.median(character_heights(train_split, config.window, 8, config.seed)))
+        target = round(target, 3)  # as stored, so that a resumed run computes the same scales
+        scales = body_scales(train_split, config, target)
+        preprocess = config.preprocess
+        if scales is not None:
+            preprocess = dataclasses.replace(preprocess, body_height=target)
+        if stats is None:
+            stats = split_statistics(train_split, config.window, config.stats_windows, config.seed, scales)
         training = None
     model.to(dev)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=config.amsgrad)
@@ -406,14 +480,16 @@ def fit(
     history: list[dict[str, float]] = list(done.get("history", []))
 
     size = config.samples_per_epoch
-    dataset = CrossSamples(train_split, config.window, config.variant, size, config.seed)
+    dataset = CrossSamples(train_split, config.window, config.variant, size, config.seed, scales)
     steps_per_epoch = max(1, size // config.batch_size)
-    val = _validation_set(val_split, config) if val_split is not None else None
-    real = torch.from_numpy(real_windows(real_tracks, config.window, config.preprocess)) if real_tracks else None
+    val = None
+    if val_split is not None:
+        val = _validation_set(val_split, config, body_scales(val_split, config, preprocess.body_height))
+    real = torch.from_numpy(real_windows(real_tracks, config.window, preprocess)) if real_tracks else None
 
     def save() -> None:
-        save_checkpoint(out, model, stats, config.preprocess, training={
-            "config": config.to_dict(), "epoch": epoch, "step": step_in_epoch, "global_step": global_step,
+        save_checkpoint(out, model, stats, preprocess, training={
+            "config": config.to_dict(), "init": init_from, "epoch": epoch, "step": step_in_epoch, "global_step": global_step,
             "optimizer": optimizer.state_dict(), "scheduler": scheduler.state_dict(),
             "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
             "real_rng": real_rng.bit_generator.state,
@@ -483,14 +559,16 @@ def _resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
     changed = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
     if changed:
         raise InputError(f"{out}: was trained with other settings ({', '.join(changed)}); resume with the same ones")
-    return {"model": loaded.model, "stats": loaded.stats, "training": loaded.training}
+    return {"model": loaded.model, "stats": loaded.stats, "training": loaded.training, "preprocess": loaded.preprocess}
 
 
-def _validation_set(split: WorldSplit, config: TrainConfig) -> tuple[torch.Tensor, torch.Tensor] | None:
+def _validation_set(
+    split: WorldSplit, config: TrainConfig, scales: np.ndarray | None
+) -> tuple[torch.Tensor, torch.Tensor] | None:
     if split.num_motions < 2:
         log.warning("validation split has fewer than 2 motions; no validation")
         return None
-    samples = CrossSamples(split, config.window, config.variant, config.val_samples, config.seed + 1)
+    samples = CrossSamples(split, config.window, config.variant, config.val_samples, config.seed + 1, scales)
     items = [samples.sample(0, i) for i in range(config.val_samples)]
     windows = torch.from_numpy(np.stack([it["windows"] for it in items]))  # [N, 8, T, 15, 2]
     ids = torch.from_numpy(np.stack([it["ids"] for it in items]))  # [N, 2, 3]
@@ -546,6 +624,7 @@ def train(
     resume: bool = False,
     num_workers: int = 0,
     progress: bool = True,
+    init: str | Path | None = None,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
 
@@ -561,6 +640,7 @@ def train(
         resume: continue the run in ``out``.
         num_workers: data-loader worker processes (cutting world windows overlaps the network's work).
         progress: show a progress bar.
+        init: checkpoint to start from: ours, or the authors' ``pretrained_*.pth`` with its statistics.
     """
     from retarget.world import MotionWorld
 
@@ -573,9 +653,10 @@ def train(
         dev = resolve_device(device)
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    start = load_weights(init) if init is not None and not resume else None
     real = read_real_tracks(real_dir) if real_dir is not None else []
     world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
     return fit(
         world.split("train"), world.split("val"), out, config, dev, real, epochs, minutes, resume,
-        num_workers=num_workers, progress=progress,
+        num_workers=num_workers, progress=progress, init=start,
     )

@@ -94,8 +94,21 @@ def train(
     ] = None,
     workers: Annotated[int, typer.Option("--workers", min=0, help="Data-loader processes cutting world windows.")] = 0,
     device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
+    init: Annotated[
+        Path | None,
+        typer.Option("--init", help="Start from these weights: a clone2d checkpoint or the authors' pretrained_*.pth."),
+    ] = None,
+    lr: Annotated[float, typer.Option("--lr", min=1e-7, max=1.0, help="Learning rate (1e-3 from scratch).")] = 1e-3,
+    trajectory_weight: Annotated[
+        float, typer.Option("--trajectory-weight", min=0.0, help="Weight of the integrated root-path loss (0 = the paper).")
+    ] = 0.5,
+    foot_weight: Annotated[float, typer.Option("--foot-weight", min=0.0, help="Weight of the foot-velocity loss.")] = 0.5,
+    triplet_weight: Annotated[float, typer.Option("--triplet-weight", min=0.0, help="Weight of the triplet loss.")] = 0.1,
+    triplet_margin: Annotated[float, typer.Option("--triplet-margin", min=0.0, help="Margin of the triplet loss.")] = 0.3,
 ) -> None:
     """Train the retargeting network on the motion world built from --mocap."""
+    import dataclasses
+
     from pose_io.errors import InputError
     from retarget.losses import ablation_config
     from retarget.runtime import configure_threads
@@ -103,13 +116,17 @@ def train(
     from retarget.train import train as run_training
 
     try:
-        config = TrainConfig(variant=variant, loss=ablation_config(ablation), seed=seed)
+        loss = dataclasses.replace(
+            ablation_config(ablation), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
+            triplet_weight=triplet_weight, triplet_margin=triplet_margin,
+        )
+        config = TrainConfig(variant=variant, loss=loss, seed=seed, lr=lr)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     configure_threads(threads)
     summary = run_training(
         mocap, out, cache_dir=cache, real_dir=real, config=config, device=device, epochs=epochs,
-        minutes=minutes, resume=resume, num_workers=workers,
+        minutes=minutes, resume=resume, num_workers=workers, init=init,
     )
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
     console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
@@ -132,6 +149,10 @@ def evaluate(
     ] = None,
     bvh: Annotated[
         list[Path] | None, typer.Option("--bvh", help="Extra mocap file replayed on the test characters (repeatable).")
+    ] = None,
+    real: Annotated[
+        Path | None,
+        typer.Option("--real", help="Folder of OpenPose folders: every ordered pair retargeted and measured."),
     ] = None,
     pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
@@ -165,13 +186,18 @@ def evaluate(
         named[name.strip()] = Path(path)
     if split not in ("test", "val"):
         raise InputError(f"--split {split!r}: valid: test, val")
+    real_tracks = None
+    if real is not None:
+        from retarget.train import read_real_tracks
+
+        real_tracks = dict(read_real_tracks(real, named=True))
     configure_threads(threads)
     world = MotionWorld.build(mocap, cache, seed=world_seed)
     with Progress(TextColumn("[bold]eval"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                   console=console, transient=True) as bar:  # fmt: skip
         task = bar.add_task("eval", total=None)
         doc, table = run_eval(
-            world.split(split), out, weights=weights, compare=named, official=official, bvh=bvh or (),
+            world.split(split), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, seed=seed), fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed,
             progress=lambda done, total: bar.update(task, completed=done, total=total),

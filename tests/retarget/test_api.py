@@ -143,3 +143,33 @@ def test_missing_packaged_weights_say_what_to_do(monkeypatch, tmp_path):
     monkeypatch.setattr(api, "PACKAGED_WEIGHTS", tmp_path / "clone2d_full.pt")
     with pytest.raises(InputError, match="no trained retargeting weights are shipped yet.*--weights"):
         load_retargeter()
+
+
+def test_body_normalised_results_do_not_depend_on_the_guessed_image_size(weights_dir, shared_dir):
+    """OpenPose JSON stores no image size; with body-height normalisation the guess must not matter."""
+    from retarget.checkpoint import load_weights
+
+    loaded = load_weights(weights_dir / "pretrained_full.pth")
+    body = api.Retargeter(loaded.model, loaded.stats, dataclasses.replace(loaded.preprocess, body_height=160.0),
+                          torch.device("cpu"))  # fmt: skip
+    image = api.Retargeter(loaded.model, loaded.stats, loaded.preprocess, torch.device("cpu"))
+    outputs = {}
+    for size in [(720, 720), (1920, 1080), None]:
+        motion = read_track(shared_dir / "openpose_examples" / "tall_man", image_size=size)
+        reference = read_track(shared_dir / "openpose_examples" / "small_man", image_size=size)
+        outputs[size] = (body.retarget(motion, body.reference_codes(reference)).joints,
+                         image.retarget(motion, image.reference_codes(reference)).joints)  # fmt: skip
+    first = outputs[(720, 720)]
+    for size, (by_body, by_image) in outputs.items():
+        np.testing.assert_allclose(by_body, first[0], atol=1e-3)
+        if size != (720, 720):  # the authors' rule changes with the guess
+            assert np.abs(by_image - first[1]).max() > 1.0
+
+
+def test_reference_codes_keep_their_scale_and_refuse_a_bad_one(retargeter, clips):
+    codes = retargeter.reference_codes(clips["small_man"])
+    assert codes.scale == pytest.approx(512 / 720)
+    back = ReferenceCodes.from_dict(codes.to_dict())
+    assert back.scale == codes.scale
+    with pytest.raises(InputError, match="scale"):
+        ReferenceCodes.from_dict({**codes.to_dict(), "scale": np.array(-1.0)})

@@ -4,7 +4,14 @@ import torch
 import torch.nn.functional as F
 
 from retarget.augment import combo_index
-from retarget.losses import LossConfig, ablation_config, foot_velocity, objective, used_combos
+from retarget.losses import (
+    LossConfig,
+    ablation_config,
+    foot_velocity,
+    objective,
+    trajectory_error,
+    used_combos,
+)
 from retarget.model import RetargetNet, variant_config
 from retarget.preprocess import LAYOUT, NormStats, joints_to_channels
 
@@ -81,3 +88,24 @@ def test_foot_velocity_is_the_global_ankle_velocity():
     v = foot_velocity(joints_to_channels(joints, stats), stats)  # [1, 5, 2 feet (r, l), 2]
     torch.testing.assert_close(v[0, :, 0, 0], torch.full((5,), 1.5, dtype=torch.float64))
     torch.testing.assert_close(v[0, :, 1, 0], torch.zeros(5, dtype=torch.float64))
+
+
+def test_trajectory_error_ignores_a_translation_and_sees_a_drift():
+    truth = torch.randn(3, 30, 32)
+    same = truth.clone()
+    same[:, 28:, 0] += 5.0  # one jump in the first frame: the whole path moves by a constant
+    torch.testing.assert_close(trajectory_error(same, truth), torch.zeros(3), atol=1e-6, rtol=0)
+    drift = truth.clone()
+    drift[:, 28] += 0.1  # a small bias per frame adds up over the window
+    error = trajectory_error(drift, truth)
+    t = torch.arange(32.0)
+    expected = ((0.1 * (t + 1) - (0.1 * (t + 1)).mean()) ** 2).mean() / 2 / 32
+    torch.testing.assert_close(error, torch.full((3,), float(expected)))
+
+
+def test_trajectory_term_joins_the_objective_when_weighted():
+    net = RetargetNet().eval()
+    x = torch.randn(2, 8, 30, 32)
+    losses = objective(net, x, x, _stats(), LossConfig(trajectory_weight=0.5))
+    assert "trajectory" in losses and float(losses["trajectory"].detach()) > 0
+    assert "trajectory" not in objective(net, x, x, _stats(), LossConfig())

@@ -14,7 +14,10 @@ from retarget.train import (
     CrossSamples,
     TrainConfig,
     batch_tensors,
+    body_scales,
+    character_heights,
     fit,
+    mean_pose_height,
     split_statistics,
     train,
     train_step,
@@ -211,3 +214,34 @@ def test_real_tracks_are_read_from_openpose_folders(shared_dir, tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match="no OpenPose folders"):
         read_real_tracks(tmp_path / "empty")
+
+
+def test_fit_starts_from_given_weights_and_keeps_their_statistics(tmp_path):
+    split = FakeSplit()
+    fit(split, None, tmp_path / "first.pt", TINY, epochs=1)
+    start = load_checkpoint(tmp_path / "first.pt")
+    fit(split, None, tmp_path / "tuned.pt", TINY, epochs=1, init=start)
+    tuned = load_checkpoint(tmp_path / "tuned.pt")
+    np.testing.assert_array_equal(tuned.stats.mean, start.stats.mean)
+    assert tuned.training["init"] == str(tmp_path / "first.pt")
+    assert tuned.preprocess.body_height == pytest.approx(mean_pose_height(start.stats), abs=1e-3)
+    assert any(not torch.equal(a, b) for a, b in zip(tuned.model.state_dict().values(),
+                                                      start.model.state_dict().values()))  # fmt: skip
+    with pytest.raises(InputError, match="a full network; this run trains a skeleton one"):
+        fit(split, None, tmp_path / "other.pt", TrainConfig(variant="skeleton"), epochs=1, init=start)
+
+
+def test_characters_are_brought_to_one_height(tmp_path):
+    split = FakeSplit(characters=3)
+    heights = character_heights(split, 64, 4, seed=0)
+    assert heights.shape == (3,) and np.ptp(heights) > 1.0  # the fake characters differ in size
+    scales = body_scales(split, TINY, target=100.0)
+    np.testing.assert_allclose(character_heights_scaled(split, scales), 100.0, rtol=0.05)
+    assert body_scales(split, TrainConfig(body_normalise=False), 100.0) is None
+
+
+def character_heights_scaled(split, scales):
+    from pose_io.measures import skeleton_heights
+
+    return np.array([np.median(skeleton_heights(np.stack([split.window(m, c, 0) * scales[c] for m in range(2)])))
+                     for c in range(split.num_characters)])  # fmt: skip
