@@ -17,8 +17,7 @@ TALL_MAN = Path(__file__).resolve().parents[2] / "shared" / "openpose_examples" 
 def synthetic_track() -> PoseTrack:
     """The built-in demo's driver motion projected by the motion world (body25, 256², no frames rendered)."""
     from clone.demo import demo_motions
-    from retarget.world.appearance import get_character
-    from retarget.world.render import render_performance
+    from clone.synth import get_character, render_performance
 
     skeleton, look, _ = get_character("short_stocky")
     _, track, _ = render_performance(demo_motions()["driver"], skeleton, look, yaw=-35.0, size=256)

@@ -25,9 +25,8 @@ METHODS = ("global-scale", "retarget")
 def make_model(folder: Path) -> Path:
     """Train a reference model a few steps on a 24-frame synthetic performance; returns its path."""
     from clone.demo import demo_motions
+    from clone.synth import get_character, save_performance
     from clone.train_ref import TrainConfig, train_reference
-    from retarget.world.appearance import get_character
-    from retarget.world.render import save_performance
 
     skeleton, look, _ = get_character("tall_long_legs")
     ref = save_performance(folder / "reference", demo_motions()["reference"], skeleton, look, yaw=15.0,

@@ -37,9 +37,8 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
     from clone.demo import demo_motions
     from clone.drive import generate_frames
     from clone.reference_model import load_reference_model
+    from clone.synth import get_character, render_performance, save_performance
     from clone.train_ref import TrainConfig, train_reference
-    from retarget.world.appearance import get_character
-    from retarget.world.render import render_performance, save_performance
 
     torch.set_num_threads(1)
     budgets = (0.5, 1.0) if quick else (1.0, 3.0, 10.0)

@@ -42,9 +42,8 @@ def test_api_script(shared_dir, tmp_path):
 
 def _synthetic_video(path: Path, role: str, character: str, yaw: float, frames: int) -> None:
     from clone.demo import demo_motions
+    from clone.synth import get_character, render_performance
     from pose_io.video import VideoWriter
-    from retarget.world.appearance import get_character
-    from retarget.world.render import render_performance
 
     skeleton, look, _ = get_character(character)
     images, _track, _meta = render_performance(demo_motions()[role], skeleton, look, yaw=yaw, size=160,

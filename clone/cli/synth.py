@@ -38,10 +38,9 @@ def render_command(
     """Render MOTION performed by a character, framed by the world's framing rule."""
     from rich.progress import Progress
 
+    from clone.synth import get_character, save_performance
     from pose_io.atomic import check_new_output
     from pose_io.errors import InputError
-    from retarget.world.appearance import get_character
-    from retarget.world.render import save_performance
     from retarget.world.rigs import load_motion
 
     check_new_output(out, overwrite)
@@ -66,7 +65,7 @@ def render_command(
 @user_errors
 def characters_command() -> None:
     """List the named characters: height, proportions and look."""
-    from retarget.world.appearance import get_character
+    from clone.synth.appearance import get_character
     from retarget.world.skeleton import NAMED_CHARACTERS
 
     for name in NAMED_CHARACTERS:

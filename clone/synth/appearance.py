@@ -1,6 +1,6 @@
 """How a synthetic performer looks: body shape (limb thickness, torso and head size), skin, hair and clothes.
 
-A :class:`Look` is plain data; :mod:`retarget.world.render` turns it and projected joints into frames. The
+A :class:`Look` is plain data; :mod:`clone.synth.body` turns it and projected joints into frames. The
 skeleton (bone lengths) comes from the motion world; the look adds everything a skeleton does not fix, so a
 pose-to-frame generator has a real, person-shaped appearance to learn.
 
