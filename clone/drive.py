@@ -27,6 +27,7 @@ import torch
 from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
 from clone.networks import generator_input
 from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
+from clone.tensors import to_images, to_tensor
 from pose_io.atomic import check_new_output
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
@@ -154,8 +155,6 @@ def generate_frames(
     Yields:
         ``(pose map, frame)`` per track frame, both [S, S, 3] uint8 RGB.
     """
-    from clone.train_ref import to_images, to_tensor
-
     device = torch.device(device)
     net = model.build_generator(device)
     size, layout = model.canvas.size, track.joint_layout

@@ -11,10 +11,14 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
 - ``track_summary``: frame counts, visible fractions, median bone lengths (for reports)
 - ``reference_codes``: ``ReferenceCodes.to_dict()`` of the retargeting network, or None; ``codes_weights``:
   the SHA-256 of the weights file that made them, ``codes_weights_path`` where that file was
-- ``training``: steps, seconds, frames used/skipped, the training config
+- ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
+  the weights: ``steps``, ``seconds``, ``device``, ``config`` (the ``TrainConfig`` as a dict), ``trainer``
+  (discriminator, both optimisers, step) and ``rng`` (the run's random state). A file without it drives as
+  well but cannot be resumed.
 
-Training state (discriminator, optimisers, step, random state) lives in a sibling ``<model>.state`` file so
-the model a user passes around stays small.
+Format versions: 2 keeps the training state in the file under ``training``; 1 kept only the record there
+(steps, seconds, config, device), with the state in a sibling ``<model>.state`` file. Version 1 files still
+load (and drive); they cannot be resumed.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import logging
 import os
 import pickle
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -41,8 +45,7 @@ from retarget.global_scale import ScaleStats
 log = logging.getLogger(__name__)
 
 KIND = "clone2d-reference"
-STATE_KIND = "clone2d-reference-state"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 LAYOUT = "body15"
 
 
@@ -61,7 +64,7 @@ class ReferenceModel:
         reference_codes: the retargeting network's codes of the reference (plain arrays), or None.
         codes_weights: SHA-256 of the retargeting weights that made ``reference_codes``, or None.
         codes_weights_path: where those weights were (a hint for `clone drive` when no --weights is given).
-        training: plain-data record of the training run.
+        training: the training run's record and resume state (see the module docstring), or None.
         temporal: whether the generator takes the previous frame.
     """
 
@@ -75,7 +78,7 @@ class ReferenceModel:
     reference_codes: dict[str, Any] | None = None
     codes_weights: str | None = None
     codes_weights_path: str | None = None
-    training: dict[str, Any] = field(default_factory=dict)
+    training: dict[str, Any] | None = None
     temporal: bool = True
 
     def build_generator(self, device: torch.device | str = "cpu") -> UNetGenerator:
@@ -83,12 +86,6 @@ class ReferenceModel:
         net = build_generator(self.generator_name, self.generator_config)
         net.load_state_dict(self.generator_state)
         return net.to(device).eval()
-
-
-def state_path(model_path: str | os.PathLike) -> Path:
-    """Where the training state of ``model_path`` lives: ``<model>.state``."""
-    p = Path(model_path)
-    return p.with_name(p.name + ".state")
 
 
 def preview_path(model_path: str | os.PathLike) -> Path:
@@ -116,6 +113,17 @@ def _to_storable(obj: Any) -> Any:
         return {str(k): _to_storable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [_to_storable(v) for v in obj]
+    return obj
+
+
+def _to_cpu(obj: Any) -> Any:
+    """Tensors -> detached CPU tensors, recursively; keys, lists and tuples stay as they are."""
+    if isinstance(obj, torch.Tensor):
+        return obj.detach().cpu()
+    if isinstance(obj, dict):
+        return {k: _to_cpu(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return type(obj)(_to_cpu(v) for v in obj)
     return obj
 
 
@@ -164,8 +172,10 @@ def save_reference_model(model: ReferenceModel, path: str | os.PathLike, overwri
         "reference_codes": None if model.reference_codes is None else _to_storable(model.reference_codes),
         "codes_weights": model.codes_weights,
         "codes_weights_path": model.codes_weights_path,
-        "training": _to_storable(model.training),
     }
+    if model.training is not None:
+        # As it is: optimiser states have int keys and tensors that _to_storable would change.
+        payload["training"] = _to_cpu(model.training)
     path = Path(path)
     with atomic_file(path, overwrite=overwrite) as tmp:
         torch.save(payload, tmp)
@@ -198,6 +208,13 @@ def load_checkpoint_dict(path: str | os.PathLike, kind: str) -> dict[str, Any]:
     return data
 
 
+def _training(training: Any) -> dict[str, Any] | None:
+    """The stored ``training`` entry: a dict, or None when the file has none."""
+    if training is not None and not isinstance(training, dict):
+        raise TypeError(f"training entry is a {type(training).__name__}, not a dict")
+    return training
+
+
 def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
     """Read a reference model written by :func:`save_reference_model`.
 
@@ -219,7 +236,7 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
             reference_codes=None if data.get("reference_codes") is None else _from_storable(data["reference_codes"]),
             codes_weights=data.get("codes_weights"),
             codes_weights_path=data.get("codes_weights_path"),
-            training=_from_storable(data.get("training", {})),
+            training=_training(data.get("training")),
             temporal=bool(data.get("temporal", True)),
         )
         model.build_generator("cpu")  # fails here, not mid-drive, when the weights do not fit the config

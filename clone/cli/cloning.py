@@ -1,6 +1,6 @@
 """`clone train-ref` and `clone drive`: performance cloning with a pose-to-frame generator.
 
-    clone train-ref ref_poses/ frames/          # writes ./ref_model.pt (+ ref_model.pt.state, ref_model.preview.png)
+    clone train-ref ref_poses/ frames/          # writes ./ref_model.pt (+ ref_model.preview.png)
     clone drive drive_poses/ --out out.mp4      # reads ./ref_model.pt
 
 torch and the video libraries are imported inside the commands so that `clone --help` stays fast.
@@ -48,7 +48,8 @@ def train_ref(
         "--canvas", help="crop (around the performer) | full (letterboxed frame).")] = "crop",
     device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue training the model at --out.")] = False,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue training the model at --out from the training state stored in it.")] = False,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing model at --out.")] = False,
     align: Annotated[str, typer.Option("--align", help="exact: frame and pose counts must agree | trim.")] = "exact",
     weights: Annotated[Path | None, typer.Option(
@@ -58,7 +59,9 @@ def train_ref(
 
     Writes ONE model (default ./ref_model.pt, where `clone drive` looks for it).
 
-    Beside it: a .state file for --resume and a preview image (pose | generated | real).
+    The model also holds its training state: --resume continues it exactly.
+
+    Beside it: a preview image (pose | generated | real).
 
     An existing model is never replaced unless --resume or --overwrite is given.
     """

@@ -16,7 +16,7 @@ from clone.reference_model import load_reference_model
 from pose_io.readers import read_track
 from pose_io.writers import write_track
 from retarget import api as retarget_api
-from tests.clone.test_train_ref import (  # noqa: F401 (_restore_threads is an autouse fixture)
+from tests.clone.train_ref.helpers import (  # noqa: F401 (_restore_threads is an autouse fixture)
     OFFICIAL_WEIGHTS,
     _restore_threads,
     figure_track,

@@ -1,0 +1,145 @@
+"""The run's checkpoint: ONE reference-model file (:mod:`clone.reference_model`) with the generator and, under
+``training``, everything a resumed run needs, written atomically together.
+
+``training`` holds the run's record (``steps``, ``seconds``, ``device``, ``config``) and its resume state:
+``trainer`` (:meth:`Trainer.state_dict`: discriminator, both optimisers, step) and ``rng`` (the state of the
+run's CPU generator, which picks samples and draws the augmentation). Since nothing lives beside the model,
+the state of one model cannot be resumed with the weights of another.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from clone.canvas import Canvas
+from clone.reference_model import ReferenceModel, load_reference_model, save_reference_model
+from clone.train_ref.config import TrainConfig
+from clone.train_ref.trainer import Trainer
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+from retarget.global_scale import ScaleStats
+
+# Entries of ``training`` without which a model cannot be resumed.
+RESUME_KEYS = ("config", "trainer", "rng")
+
+
+@dataclass(frozen=True)
+class ReferenceInfo:
+    """What the model file stores about the reference besides the generator; fixed for a run.
+
+    Attributes:
+        canvas: where the canvas sits in the reference's frames.
+        scale_stats: feet range and heights for global scaling, or None.
+        track: the reference's body15 track in its image pixels.
+        summary: plain-data summary of the track (see :func:`clone.train_ref.data.track_summary`).
+        codes: the retargeting network's codes of the reference, or None.
+        codes_weights: SHA-256 of the weights that made ``codes``, or None.
+        codes_weights_path: where those weights were, or None.
+    """
+
+    canvas: Canvas
+    scale_stats: ScaleStats | None
+    track: PoseTrack
+    summary: dict[str, Any]
+    codes: dict[str, Any] | None
+    codes_weights: str | None
+    codes_weights_path: str | None
+
+
+def checkpoint_model(
+    trainer: Trainer, reference: ReferenceInfo, config: TrainConfig, rng: torch.Generator, seconds: float
+) -> ReferenceModel:
+    """The reference model of the run as it stands, with its training state.
+
+    Args:
+        trainer: the networks and optimisers.
+        reference: what the file stores about the reference.
+        config: the run's settings.
+        rng: the run's CPU generator.
+        seconds: training time so far, over all resumed runs.
+    """
+    training = {
+        "steps": trainer.step_count,
+        "seconds": seconds,
+        "config": config.to_dict(),
+        "device": str(trainer.device),
+        "trainer": trainer.state_dict(),
+        "rng": rng.get_state(),
+    }
+    return ReferenceModel(
+        generator_name="unet",
+        generator_config=trainer.g.config,
+        generator_state=trainer.g.state_dict(),
+        canvas=reference.canvas,
+        scale_stats=reference.scale_stats,
+        reference_track=reference.track,
+        track_summary=reference.summary,
+        reference_codes=reference.codes,
+        codes_weights=reference.codes_weights,
+        codes_weights_path=reference.codes_weights_path,
+        training=training,
+        temporal=config.temporal,
+    )
+
+
+def save_checkpoint(
+    path: Path, trainer: Trainer, reference: ReferenceInfo, config: TrainConfig, rng: torch.Generator,
+    seconds: float,
+) -> None:
+    """Write the run's model file with its training state atomically (see :func:`checkpoint_model`)."""
+    save_reference_model(checkpoint_model(trainer, reference, config, rng, seconds), path, overwrite=True)
+
+
+def load_resumable(path: str | os.PathLike) -> ReferenceModel:
+    """The model at ``path``, checked to hold training state.
+
+    Raises:
+        InputError: no such file, not a readable model, or a model without training state.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: nothing to resume (no such model); drop --resume to start a new one")
+    model = load_reference_model(path)
+    training = model.training or {}
+    if any(key not in training for key in RESUME_KEYS):
+        raise InputError(f"{path}: holds no training state to resume (a stripped or pre-format-2 model); "
+                         "pass --overwrite instead of --resume to train it anew")
+    return model
+
+
+def resume_config(model: ReferenceModel, given: TrainConfig | None, path: str | os.PathLike) -> TrainConfig:
+    """The stored run's config; of ``given`` only batch size, preview and save intervals apply.
+
+    Raises:
+        InputError: the stored config does not parse, or ``given`` asks for another canvas size.
+    """
+    try:
+        config = TrainConfig.from_dict(model.training["config"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{path}: stored training config does not parse ({exc}); cannot resume") from None
+    if given is None:
+        return config
+    if given.size != config.size:
+        raise InputError(f"--size {given.size} differs from the model's {config.size}; cannot resume at another size")
+    return replace(config, batch_size=given.batch_size, preview_every=given.preview_every,
+                   save_every_s=given.save_every_s)
+
+
+def restore(trainer: Trainer, rng: torch.Generator, model: ReferenceModel, path: str | os.PathLike) -> None:
+    """Put the stored discriminator, optimisers, step and random state into ``trainer`` and ``rng``.
+
+    Raises:
+        InputError: the stored state does not fit the networks.
+    """
+    training = model.training or {}
+    try:
+        trainer.load_state_dict(training["trainer"])
+        rng.set_state(training["rng"])
+    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else exc.__class__.__name__
+        raise InputError(f"{path}: damaged training state ({first[:120]}); cannot resume") from None

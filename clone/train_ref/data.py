@@ -1,0 +1,199 @@
+"""The reference's data: its poses and frames read and checked, the frames cut to the canvas and kept in a
+frame store, training batches, and what the model file records about the reference (summary, codes, scale).
+
+Frames are ``[S, S, 3]`` uint8 RGB on the canvas; joints are canvas pixels with NaN where missing.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from clone.canvas import render_pose_map
+from clone.reference_model import LAYOUT, file_sha256
+from clone.tensors import to_tensor
+from pose_io.errors import InputError
+from pose_io.layouts import get_layout
+from pose_io.track import PoseTrack
+from retarget.global_scale import ScaleStats, scale_stats
+
+if TYPE_CHECKING:
+    from pose_io.video import Frames
+
+log = logging.getLogger(__name__)
+
+ALIGN_MODES = ("exact", "trim")
+# Frames are kept in memory up to this many bytes, beyond that in a temporary memory-mapped file.
+_IN_MEMORY_BYTES = 1 << 30
+
+
+def usable_frames(track: PoseTrack, min_visible: int) -> np.ndarray:
+    """[T] bool: frames with at least ``min_visible`` visible joints."""
+    return (~track.missing).sum(axis=1) >= min_visible
+
+
+class ReferenceData:
+    """The reference's frames on the canvas and its poses in canvas pixels.
+
+    Attributes:
+        frames: [N, S, S, 3] uint8 RGB (in memory or memory-mapped).
+        joints: [N, J, 2] float32 canvas pixels, NaN where missing.
+        usable: [N] bool, frames trained on.
+        size: S.
+    """
+
+    def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int) -> None:
+        self.frames = frames
+        self.joints = joints
+        self.usable = usable
+        self.size = size
+        self.layout = get_layout(LAYOUT)
+        self.indices = np.flatnonzero(usable)
+
+    def pose_map(self, i: int) -> np.ndarray:
+        """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0)."""
+        if i < 0:
+            return np.zeros((self.size, self.size, 3), dtype=np.uint8)
+        return render_pose_map(self.joints[i], self.size, self.layout)
+
+    def batch(self, idx: np.ndarray) -> dict[str, Tensor]:
+        """Tensors for frames ``idx`` and their predecessors.
+
+        Returns:
+            ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
+            frame of frame 0 is zeros); ``has_prev``: [B] bool.
+        """
+        prev = idx - 1
+        zero = np.zeros((self.size, self.size, 3), dtype=np.uint8)
+        has_prev = torch.from_numpy(prev >= 0)
+        frame_prev = to_tensor(np.stack([self.frames[p] if p >= 0 else zero for p in prev]))
+        frame_prev[~has_prev] = 0.0
+        return {
+            "pose_prev": to_tensor(np.stack([self.pose_map(int(p)) for p in prev])),
+            "pose_cur": to_tensor(np.stack([self.pose_map(int(i)) for i in idx])),
+            "frame_prev": frame_prev,
+            "frame_cur": to_tensor(np.stack([self.frames[i] for i in idx])),
+            "has_prev": has_prev,
+        }
+
+
+@contextlib.contextmanager
+def frame_store(count: int, size: int) -> Iterator[np.ndarray]:
+    """A [count, size, size, 3] uint8 array: in memory when small, else a temporary memory-mapped file."""
+    nbytes = count * size * size * 3
+    if nbytes <= _IN_MEMORY_BYTES:
+        yield np.zeros((count, size, size, 3), dtype=np.uint8)
+        return
+    with tempfile.TemporaryDirectory(prefix="clone2d-frames-") as tmp:
+        log.info("keeping %d frames (%.1f GiB) in a memory-mapped file", count, nbytes / 2**30)
+        arr = np.lib.format.open_memmap(os.path.join(tmp, "frames.npy"), mode="w+", dtype=np.uint8,
+                                        shape=(count, size, size, 3))
+        try:
+            yield arr
+        finally:
+            del arr
+
+
+def read_reference(
+    poses_path: str | os.PathLike, frames_path: str | os.PathLike, align: str = "exact"
+) -> tuple[PoseTrack, Frames, int]:
+    """Open the reference's poses and frames and check that they belong together.
+
+    Args:
+        poses_path: any pose track ``pose_io`` reads.
+        frames_path: a video or a folder of images.
+        align: ``exact`` (counts must agree) or ``trim`` (use the common prefix).
+
+    Returns:
+        ``(track in body15 with the frames' image size, frame stream, frame count to use)``.
+    """
+    from pose_io.readers import read_detections, track_from_detections
+    from pose_io.video import read_frames
+
+    if align not in ALIGN_MODES:
+        raise InputError(f"unknown --align {align!r}; valid: {', '.join(ALIGN_MODES)}")
+    frames = read_frames(frames_path)
+    detections = read_detections(poses_path)
+    if detections.image_size is not None and tuple(detections.image_size) != tuple(frames.size):
+        raise InputError(
+            f"{poses_path}: poses are for {detections.image_size[0]}x{detections.image_size[1]} frames, "
+            f"{frames_path} has {frames.size[0]}x{frames.size[1]}"
+        )
+    track = track_from_detections(detections, fps=None, image_size=tuple(frames.size))
+    if frames.kind == "video":
+        track = track.replace(fps=frames.fps)
+    track = track.to_layout(LAYOUT)
+    n_frames, n_poses = frames.num_frames, track.num_frames
+    if n_frames != n_poses:
+        if align != "trim":
+            raise InputError(
+                f"{poses_path} has {n_poses} poses but {frames_path} has {n_frames} frames; "
+                f"pass --align trim to use the first {min(n_frames, n_poses)} of each"
+            )
+        log.warning("using the first %d frames and poses (%d poses, %d frames)", min(n_frames, n_poses),
+                    n_poses, n_frames)
+    count = min(n_frames, n_poses)
+    return track.frames(0, count), frames, count
+
+
+def track_summary(track: PoseTrack, usable: np.ndarray) -> dict[str, Any]:
+    """Plain-data summary of the reference's poses for the model file."""
+    layout = track.joint_layout
+    bones = {}
+    for a, b in layout.limbs:
+        d = np.linalg.norm(track.joint(a) - track.joint(b), axis=-1)
+        d = d[np.isfinite(d)]
+        bones[f"{a}-{b}"] = float(np.median(d)) if len(d) else float("nan")
+    return {
+        "frames": track.num_frames,
+        "usable_frames": int(usable.sum()),
+        "skipped_frames": int((~usable).sum()),
+        "fps": track.fps,
+        "image_size": list(track.image_size),
+        "layout": track.layout,
+        "visible_fraction": (1.0 - track.missing.mean(axis=0)).astype(np.float32),
+        "median_bone_lengths": bones,
+    }
+
+
+def reference_codes(
+    track: PoseTrack, weights: str | os.PathLike | None
+) -> tuple[dict[str, Any] | None, str | None, str | None]:
+    """The retargeting network's codes of the reference: ``(codes dict, weights SHA-256, weights path)``.
+
+    An explicitly given ``weights`` file must load and encode the track; without one, the shipped weights are
+    used when present, and otherwise no codes are stored (training still works; drive then needs --weights
+    for ``--method retarget``).
+    """
+    from retarget.api import PACKAGED_WEIGHTS, load_retargeter
+
+    if weights is None and not PACKAGED_WEIGHTS.is_file():
+        log.warning("no retargeting weights are shipped; storing no reference codes (pass --weights to store them)")
+        return None, None, None
+    path = Path(weights) if weights is not None else PACKAGED_WEIGHTS
+    try:
+        codes = load_retargeter(path, device="cpu").reference_codes(track)
+    except InputError as exc:
+        if weights is not None:
+            raise
+        log.warning("reference codes: %s; storing none", exc)
+        return None, None, None
+    return codes.to_dict(), file_sha256(path), str(path.resolve())
+
+
+def maybe_scale_stats(track: PoseTrack) -> ScaleStats | None:
+    """The reference's global-scale statistics, or None (with a warning) when its poses do not give them."""
+    try:
+        return scale_stats(track.joints, track.joint_layout)
+    except InputError as exc:
+        log.warning("reference: %s; --method global-scale will not be available", exc)
+        return None

@@ -1,0 +1,285 @@
+"""The training loop of `clone train-ref`: one run from the reference's files to the model file.
+
+A run reads the reference (:mod:`clone.train_ref.data`), builds or resumes the :class:`Trainer`, steps it on
+augmented batches until the step or time budget is spent, writes previews (pose map | generated | real) and
+checkpoints the model file with its training state (:mod:`clone.train_ref.checkpoint`). Progress goes to a
+callback; the caller draws it. Ctrl-C ends the run early and still saves.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import torch
+
+from clone.canvas import choose_canvas, cut_frame, image_to_canvas
+from clone.reference_model import ReferenceModel, preview_path
+from clone.train_ref.augment import random_affines, warp_batch
+from clone.train_ref.checkpoint import ReferenceInfo, load_resumable, restore, resume_config, save_checkpoint
+from clone.train_ref.config import TrainConfig
+from clone.train_ref.data import (
+    ReferenceData,
+    frame_store,
+    maybe_scale_stats,
+    read_reference,
+    reference_codes,
+    track_summary,
+    usable_frames,
+)
+from clone.train_ref.preview import preview_grid, preview_rows, write_png
+from clone.train_ref.trainer import Trainer
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+
+if TYPE_CHECKING:
+    from pose_io.video import Frames
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """What a training run did."""
+
+    model_path: Path
+    preview_path: Path
+    steps: int
+    steps_this_run: int
+    seconds: float
+    frames: int
+    usable_frames: int
+    skipped_frames: int
+    has_codes: bool
+    interrupted: bool
+    last_losses: dict[str, float]
+
+
+@dataclass
+class TrainProgress:
+    """Where a run stands, passed to the progress callback after every step (and every frame read).
+
+    While ``phase`` is ``"reading"``, ``step`` counts frames read out of ``total``.
+    """
+
+    phase: str
+    step: int
+    total: int | None
+    elapsed: float
+    limit_s: float | None
+    losses: dict[str, float]
+
+
+ProgressFn = Callable[[TrainProgress], None]
+
+
+@dataclass
+class _Run:
+    """A run in progress: what steps, checkpoints and progress reports share."""
+
+    out: Path
+    trainer: Trainer
+    reference: ReferenceInfo
+    config: TrainConfig
+    rng: torch.Generator  # CPU: picks samples and draws the augmentation
+    seconds_before: float  # training time of earlier runs of this model
+    progress: ProgressFn | None
+    started: float = 0.0  # time.perf_counter() when stepping began
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.started
+
+    def save(self) -> None:
+        save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng,
+                        self.seconds_before + self.elapsed())
+
+    def report(self, progress: TrainProgress) -> None:
+        if self.progress is not None:
+            self.progress(progress)
+
+
+def train_reference(
+    poses_path: str | os.PathLike,
+    frames_path: str | os.PathLike,
+    out: str | os.PathLike = "ref_model.pt",
+    *,
+    config: TrainConfig | None = None,
+    steps: int | None = None,
+    minutes: float | None = None,
+    device: torch.device | str = "cpu",
+    resume: bool = False,
+    overwrite: bool = False,
+    align: str = "exact",
+    weights: str | os.PathLike | None = None,
+    progress: ProgressFn | None = None,
+) -> TrainResult:
+    """Train (or continue training) a reference model.
+
+    Args:
+        poses_path: the reference's poses (any format ``pose_io`` reads).
+        frames_path: the reference's video or image folder, frame ``t`` matching pose ``t``.
+        out: the model file to write (with its training state inside).
+        config: settings of a new run (default ``TrainConfig()``). When resuming, the stored run's settings
+            apply; of ``config`` only ``batch_size``, ``preview_every`` and ``save_every_s`` are taken, and
+            a different ``size`` is an error.
+        steps: stop when the model has been trained this many steps in total.
+        minutes: stop after this many minutes of training in this run (reading the frames not counted).
+        device: where to train.
+        resume: continue the model at ``out`` from the training state stored in it.
+        overwrite: replace an existing model at ``out`` with a new one.
+        align: ``exact`` or ``trim`` (see :func:`read_reference`).
+        weights: retargeting weights for the reference codes (default: the shipped ones, if present).
+        progress: called after every step (and every frame read).
+
+    Returns:
+        What was done.
+
+    Raises:
+        InputError: bad options, unreadable or mismatched inputs, an existing ``out`` without ``resume`` or
+            ``overwrite``, or ``resume`` of a model without training state.
+    """
+    out = Path(out)
+    _check_options(resume, overwrite, steps, minutes)
+    previous, config = _previous_and_config(out, config, resume, overwrite)
+    if steps is None and minutes is None:
+        steps = config.steps
+    track, frames, count = read_reference(poses_path, frames_path, align)
+    usable = _usable(track, config.min_visible_joints, poses_path, count)
+    reference = _reference_info(track, usable, config, previous, frames_path, weights)
+    run = _start_run(out, reference, config, torch.device(device), previous, progress)
+    start_step = run.trainer.step_count
+
+    # Training needs autograd whatever mode the caller left torch in.
+    with torch.enable_grad(), frame_store(count, reference.canvas.size) as store:
+        data = _read_frames(run, frames, count, usable, store)
+        rows = preview_rows(data.indices)
+        run.started = time.perf_counter()  # --minutes counts training only
+        losses, interrupted = _train_steps(run, data, rows, steps, minutes * 60.0 if minutes is not None else None)
+        write_png(preview_grid(run.trainer, data, rows), preview_path(out))
+        run.save()
+
+    return TrainResult(
+        model_path=out, preview_path=preview_path(out), steps=run.trainer.step_count,
+        steps_this_run=run.trainer.step_count - start_step, seconds=run.elapsed(), frames=count,
+        usable_frames=int(usable.sum()), skipped_frames=int((~usable).sum()), has_codes=reference.codes is not None,
+        interrupted=interrupted, last_losses=losses,
+    )
+
+
+def _check_options(resume: bool, overwrite: bool, steps: int | None, minutes: float | None) -> None:
+    if resume and overwrite:
+        raise InputError("--resume and --overwrite exclude each other")
+    if steps is not None and steps < 1:
+        raise InputError(f"--steps must be >= 1, got {steps}")
+    if minutes is not None and not minutes > 0:
+        raise InputError(f"--minutes must be positive, got {minutes}")
+
+
+def _previous_and_config(
+    out: Path, given: TrainConfig | None, resume: bool, overwrite: bool
+) -> tuple[ReferenceModel | None, TrainConfig]:
+    """The model being resumed (None for a new one) and the run's config."""
+    if resume:
+        previous = load_resumable(out)
+        return previous, resume_config(previous, given, out)
+    if out.exists() and not overwrite:
+        raise InputError(f"{out}: already exists; pass --resume to continue it, --overwrite to replace "
+                         "it, or choose another --out")
+    return None, given or TrainConfig()
+
+
+def _usable(track: PoseTrack, min_visible: int, poses_path: str | os.PathLike, count: int) -> np.ndarray:
+    """[T] bool frames trained on; an error when there are none, a warning when some are skipped."""
+    usable = usable_frames(track, min_visible)
+    if not usable.any():
+        raise InputError(f"{poses_path}: no frame has a usable pose (>= {min_visible} of "
+                         f"{len(track.joint_layout)} joints visible)")
+    skipped = int((~usable).sum())
+    if skipped:
+        log.warning("%d of %d frames have no usable pose and are skipped", skipped, count)
+    return usable
+
+
+def _reference_info(
+    track: PoseTrack, usable: np.ndarray, config: TrainConfig, previous: ReferenceModel | None,
+    frames_path: str | os.PathLike, weights: str | os.PathLike | None,
+) -> ReferenceInfo:
+    """What the model stores about the reference: a resumed model keeps its canvas, codes and scale."""
+    summary = track_summary(track, usable)
+    if previous is not None:
+        canvas = previous.canvas
+        if canvas.image_size != track.image_size:
+            raise InputError(f"{frames_path}: frames are {track.image_size[0]}x{track.image_size[1]}, "
+                             f"the model was trained on {canvas.image_size[0]}x{canvas.image_size[1]}")
+        return ReferenceInfo(canvas, previous.scale_stats, track, summary, previous.reference_codes,
+                             previous.codes_weights, previous.codes_weights_path)
+    canvas = choose_canvas(track.joints[usable], track.image_size, config.size, config.canvas_mode,
+                           config.canvas_margin)
+    codes, codes_weights, codes_path = reference_codes(track, weights)
+    return ReferenceInfo(canvas, maybe_scale_stats(track), track, summary, codes, codes_weights, codes_path)
+
+
+def _start_run(
+    out: Path, reference: ReferenceInfo, config: TrainConfig, device: torch.device,
+    previous: ReferenceModel | None, progress: ProgressFn | None,
+) -> _Run:
+    """Seeded networks and random generator, restored from ``previous`` when resuming."""
+    torch.manual_seed(config.seed)
+    generator = previous.build_generator(device).train() if previous is not None else None
+    trainer = Trainer(config, device, generator)
+    rng = torch.Generator().manual_seed(config.seed)
+    seconds_before = 0.0
+    if previous is not None:
+        restore(trainer, rng, previous, out)
+        seconds_before = float(previous.training.get("seconds", 0.0))
+    return _Run(out, trainer, reference, config, rng, seconds_before, progress, started=time.perf_counter())
+
+
+def _read_frames(run: _Run, frames: Frames, count: int, usable: np.ndarray, store: np.ndarray) -> ReferenceData:
+    """Cut the first ``count`` frames to the canvas into ``store``; the training data over them."""
+    canvas = run.reference.canvas
+    for i, frame in enumerate(frames):
+        if i >= count:
+            break
+        store[i] = cut_frame(frame, canvas)
+        run.report(TrainProgress("reading", i + 1, count, run.elapsed(), None, {}))
+    log.info("read %d frames in %.1f s", count, run.elapsed())
+    return ReferenceData(store, image_to_canvas(run.reference.track.joints, canvas), usable, canvas.size)
+
+
+def _train_steps(
+    run: _Run, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None
+) -> tuple[dict[str, float], bool]:
+    """Step until ``steps`` in total or ``limit_s`` seconds; returns ``(last losses, interrupted)``."""
+    trainer, config = run.trainer, run.config
+    losses: dict[str, float] = {}
+    last_save = time.perf_counter()
+    try:
+        while (steps is None or trainer.step_count < steps) and (limit_s is None or run.elapsed() < limit_s):
+            losses = _one_step(run, data)
+            if trainer.step_count % config.preview_every == 0:
+                write_png(preview_grid(trainer, data, rows), preview_path(run.out))
+            if time.perf_counter() - last_save > config.save_every_s:
+                run.save()
+                last_save = time.perf_counter()
+            run.report(TrainProgress("training", trainer.step_count, steps, run.elapsed(), limit_s, losses))
+    except KeyboardInterrupt:
+        log.warning("interrupted at step %d; saving", trainer.step_count)
+        return losses, True
+    return losses, False
+
+
+def _one_step(run: _Run, data: ReferenceData) -> dict[str, float]:
+    """One augmented batch, one update of G and D."""
+    config, rng, trainer = run.config, run.rng, run.trainer
+    pick = torch.randint(len(data.indices), (config.batch_size,), generator=rng).numpy()
+    sample = data.batch(data.indices[pick])
+    sample = warp_batch(sample, random_affines(config.batch_size, data.size, config.augment, rng))
+    sample = {k: v.to(trainer.device) for k, v in sample.items()}
+    return trainer.train_step(sample, *trainer.previous_input(sample, rng))

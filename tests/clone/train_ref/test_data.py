@@ -1,0 +1,85 @@
+"""train_ref.data: reading and checking the reference's poses and frames, and what is stored about them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from clone.cli.main import app
+from clone.reference_model import load_reference_model
+from pose_io.writers import write_track
+from tests.clone.train_ref.helpers import (
+    OFFICIAL_WEIGHTS,
+    figure_track,
+    one_line_error,
+    render_figure,
+    train_args,
+    write_reference,
+)
+
+
+def test_video_reference_uses_the_video_fps(tmp_path):
+    from pose_io.video import VideoWriter
+
+    track = figure_track(20, width=96, height=72, fps=25.0)
+    poses = write_track(track.replace(fps=10.0), tmp_path / "poses.npz")
+    video = tmp_path / "ref.mp4"
+    with VideoWriter(video, fps=15.0) as writer:
+        for frame in render_figure(track):
+            writer.write(frame)
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, video, out))
+    assert result.exit_code == 0, result.output
+    model = load_reference_model(out)
+    assert model.reference_track.fps == pytest.approx(15.0) and model.reference_track.num_frames == 20
+
+
+def test_mismatched_counts_error_or_trim(tmp_path):
+    track = figure_track(24)
+    poses, frames = write_reference(tmp_path / "ref", track, render_figure(track)[:20])
+    out = tmp_path / "ref.pt"
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out)))
+    assert "24 poses" in line and "20 frames" in line and "--align trim" in line
+    assert not out.exists()
+    result = CliRunner().invoke(app, train_args(poses, frames, out, "--align", "trim"))
+    assert result.exit_code == 0, result.output
+    assert load_reference_model(out).reference_track.num_frames == 20
+
+
+def test_empty_frames_folder_and_missing_poses(reference, tmp_path):
+    poses, _ = reference
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "ref.pt"
+    assert "no image files" in one_line_error(CliRunner().invoke(app, train_args(poses, empty, out)))
+    _, frames = reference
+    assert "does not exist" in one_line_error(CliRunner().invoke(app, train_args(tmp_path / "nope", frames, out)))
+    assert not out.exists()
+
+
+def test_frames_without_usable_pose_are_skipped_and_counted(tmp_path):
+    track = figure_track(24)
+    frames = render_figure(track)
+    joints = track.joints.copy()
+    joints[[3, 4, 10], :8] = np.nan  # 7 of 15 joints left: below the default minimum of 10
+    track = track.replace(joints=joints)
+    poses, frame_dir = write_reference(tmp_path / "ref", track, frames)
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frame_dir, out))
+    assert result.exit_code == 0, result.output
+    assert "3 skipped" in result.output
+    summary = load_reference_model(out).track_summary
+    assert summary["usable_frames"] == 21 and summary["skipped_frames"] == 3
+
+
+@pytest.mark.skipif(not OFFICIAL_WEIGHTS.is_file(), reason="the authors' retargeting weights are not present")
+def test_reference_codes_are_stored_with_retargeting_weights(tmp_path):
+    poses, frames = write_reference(tmp_path / "ref", figure_track(64))
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out, "--weights", str(OFFICIAL_WEIGHTS)))
+    assert result.exit_code == 0, result.output
+    model = load_reference_model(out)
+    assert model.reference_codes is not None and model.reference_codes["body"].shape == (16,)
+    assert model.codes_weights is not None and len(model.codes_weights) == 64
+    assert model.codes_weights_path == str(OFFICIAL_WEIGHTS.resolve())

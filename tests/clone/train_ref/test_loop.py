@@ -1,0 +1,71 @@
+"""train_ref.loop through `clone train-ref`: what a run writes, where, and the options it refuses."""
+
+from __future__ import annotations
+
+import cv2
+import torch
+from typer.testing import CliRunner
+
+from clone.cli.main import app
+from clone.reference_model import FORMAT_VERSION, KIND, load_reference_model, preview_path
+from tests.clone.train_ref.helpers import one_line_error, train_args
+
+
+def test_train_ref_writes_one_model_and_preview(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "m" / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out))
+    assert result.exit_code == 0, result.output
+    assert out.is_file() and preview_path(out).is_file()
+    assert sorted(p.name for p in out.parent.iterdir()) == sorted([out.name, preview_path(out).name])
+    raw = torch.load(out, map_location="cpu", weights_only=True)
+    assert raw["kind"] == KIND and raw["format_version"] == FORMAT_VERSION
+    model = load_reference_model(out)
+    assert model.canvas.size == 32 and model.canvas.image_size == (96, 72)
+    assert model.generator_config.depth == 3 and model.temporal
+    assert model.training["steps"] == 3
+    assert model.reference_track.num_frames == 24 and model.reference_track.layout == "body15"
+    assert model.scale_stats is not None and model.scale_stats.foot_close > 0
+    assert model.track_summary["usable_frames"] == 24
+    preview = cv2.imread(str(preview_path(out)))
+    assert preview.shape[1] == 3 * 32 and preview.shape[0] % 32 == 0
+    # The stored generator rebuilds and runs without any flags.
+    net = model.build_generator()
+    assert net(torch.zeros(1, 6, 32, 32)).shape == (1, 3, 32, 32)
+
+
+def test_default_out_is_ref_model_in_the_current_folder(reference, tmp_path, monkeypatch):
+    poses, frames = reference
+    monkeypatch.chdir(tmp_path)
+    args = ["train-ref", str(poses), str(frames), "--size", "32", "--steps", "1", "--threads", "1"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "ref_model.pt").is_file()
+    # Never replaced without --resume or --overwrite.
+    before = (tmp_path / "ref_model.pt").read_bytes()
+    assert "already exists" in one_line_error(CliRunner().invoke(app, args))
+    assert (tmp_path / "ref_model.pt").read_bytes() == before
+    assert CliRunner().invoke(app, args + ["--overwrite"]).exit_code == 0
+
+
+def test_bad_options_are_one_line_errors(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "ref.pt"
+    assert "power of two" in one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--size", "100")))
+    assert "--align" in one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--align", "pad")))
+    assert "device" in one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--device", "tpu")))
+    assert not out.exists()
+
+
+def test_progress_goes_to_the_callback(reference, tmp_path):
+    from clone.train_ref import TrainConfig, TrainProgress, train_reference
+
+    poses, frames = reference
+    seen: list[TrainProgress] = []
+    result = train_reference(poses, frames, tmp_path / "ref.pt", config=TrainConfig(size=32), steps=2,
+                             device=torch.device("cpu"), progress=seen.append)
+    reading = [p for p in seen if p.phase == "reading"]
+    training = [p for p in seen if p.phase == "training"]
+    assert [p.step for p in reading] == list(range(1, 25)) and reading[-1].total == 24
+    assert [p.step for p in training] == [1, 2] and set(training[-1].losses) == {"l1", "gan", "fm", "d"}
+    assert result.steps == result.steps_this_run == 2 and not result.interrupted
