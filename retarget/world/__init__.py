@@ -3,6 +3,7 @@
 Numpy only (no torch): ``retarget`` training code turns the arrays into tensors itself.
 
 - ``load_motion``: BVH / AMC of known rigs -> ``Motion3D`` on the canonical 18-joint skeleton.
+- ``mocap``: the BVH and ASF/AMC readers and forward kinematics ``load_motion`` builds on.
 - ``Skeleton``, ``sample_skeleton``, ``NAMED_CHARACTERS``, ``skeleton_of``, ``retarget_3d``: characters.
 - ``Camera``, ``frame_camera``, ``facing_angle``, ``project``, ``VIEW_YAWS``: views and the framing rule.
 - ``MotionWorld``: the cached dataset of labelled (motion, character, view) windows.

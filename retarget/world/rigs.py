@@ -2,7 +2,8 @@
 
 ``load_motion`` reads a BVH (plain or gzip) or an Acclaim AMC (with its ASF), finds which naming the rig
 uses, runs forward kinematics for the joints it needs and returns a ``Motion3D`` in metres, Y up, on the
-ground, resampled to the requested frame rate.
+ground, resampled to the requested frame rate. The readers and the forward kinematics live in
+``retarget.world.mocap``.
 
 Mapping keys (``RIG_KEYS``) are world joint names with two twists: ``neck`` is the rig's neck *base*
 joint and ``head`` its head joint (the top of the neck); both are only used to place the skull. In the
@@ -27,12 +28,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Protocol
 
 import numpy as np
 
-from pose_io.bvh import read_asf_amc, read_bvh
 from pose_io.errors import InputError
+from retarget.world.mocap import MocapClip, read_asf_amc, read_bvh
 from retarget.world.skeleton import (
     WORLD_JOINTS,
     Motion3D,
@@ -161,16 +161,6 @@ RIGS: dict[str, RigNaming] = {
     # Rokoko and most generic exports use the MotionBuilder names without the CMU extras.
     "rokoko": RigNaming("rokoko", _MOTIONBUILDER),
 }
-
-
-class MocapClip(Protocol):
-    """What ``load_motion`` needs from a reader (``BvhClip`` and ``AcclaimClip`` both have it)."""
-
-    names: tuple[str, ...]
-    frame_time: float
-    source: str
-
-    def global_transforms(self, joints: object = None) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)

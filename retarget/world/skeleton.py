@@ -27,6 +27,10 @@ _J = {name: i for i, name in enumerate(WORLD_JOINTS)}
 # The canonical tree, parents before children. A bone is named after its child joint: "l_knee" is the
 # left thigh, "neck" the torso (mid_hip -> shoulders' midpoint), "head" the neck (-> centre of the skull),
 # "nose" the face (skull centre -> nose), "l_shoulder" half the shoulder width, "l_hip" half the hip width.
+# It is not a second copy of a mocap rig's tree (``retarget.world.mocap.MocapClip.parents``): a rig's tree
+# comes from its file, differs from rig to rig and is posed by joint rotations, while this one is fixed,
+# is posed by bone vectors and has ``mid_hip`` and ``neck`` at midpoints rather than at rig joints;
+# ``rigs`` maps the one onto the other.
 BONES: tuple[tuple[str, str], ...] = (
     ("mid_hip", "r_hip"), ("r_hip", "r_knee"), ("r_knee", "r_ankle"), ("r_ankle", "r_big_toe"),
     ("mid_hip", "l_hip"), ("l_hip", "l_knee"), ("l_knee", "l_ankle"), ("l_ankle", "l_big_toe"),

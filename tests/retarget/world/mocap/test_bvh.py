@@ -1,4 +1,4 @@
-"""BVH and ASF/AMC reading and forward kinematics."""
+"""BVH reading and forward kinematics of BVH rigs."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pose_io.bvh import axis_rotations, euler_matrices, parse_bvh, read_asf_amc, read_bvh
 from pose_io.errors import InputError
+from retarget.world.mocap import axis_rotations, euler_matrices, parse_bvh, read_bvh
 
 # A three-joint chain: Hips (6 channels, Z X Y order) -> Chest (3 channels) -> End Site.
 SMALL_BVH = """HIERARCHY
@@ -138,32 +138,3 @@ def test_missing_file_and_bad_gzip(tmp_path: Path) -> None:
     bad.write_bytes(gzip.compress(SMALL_BVH.encode())[:40])
     with pytest.raises(InputError, match="gzip"):
         read_bvh(bad)
-
-
-def test_amc_matches_the_cgspeed_bvh_of_the_same_take(shared_dir: Path) -> None:
-    """CMU 01_01 as Acclaim files and as cgspeed's BVH (whose frame 0 is an added T-pose)."""
-    folder = shared_dir / "mocap" / "cmu_fairmotion"
-    amc = read_asf_amc(folder / "01.asf", folder / "01_01.amc")
-    bvh = read_bvh(folder / "01_01.bvh.gz")
-    assert amc.num_frames == bvh.num_frames - 1
-    pa = amc.global_positions()
-    pb = bvh.global_positions()[1:]
-    legs = [("LeftUpLeg", "lfemur"), ("LeftLeg", "ltibia"), ("LeftFoot", "lfoot"), ("RightToeBase", "rtoes")]
-    for b, a in legs:
-        np.testing.assert_allclose(pb[:, bvh.index(b)], pa[:, amc.index(a)], atol=1e-3)
-    # cgspeed dropped the thorax bone, so the upper body is shifted; its limbs still agree.
-    for (b0, a0), (b1, a1) in [(("LeftArm", "lhumerus"), ("LeftHand", "lwrist")), (("Neck1", "upperneck"), ("Head", "head"))]:
-        vb = pb[:, bvh.index(b1)] - pb[:, bvh.index(b0)]
-        va = pa[:, amc.index(a1)] - pa[:, amc.index(a0)]
-        np.testing.assert_allclose(vb, va, atol=1e-3)
-
-
-def test_broken_amc(tmp_path: Path, shared_dir: Path) -> None:
-    asf = shared_dir / "mocap" / "cmu_fairmotion" / "01.asf"
-    amc = tmp_path / "x.amc"
-    amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\nlfemur 1 2 x\n")
-    with pytest.raises(InputError, match="non-numeric"):
-        read_asf_amc(asf, amc)
-    amc.write_text(":DEGREES\n1\nroot 0 0 0 0 0 0\nnobone 1 2 3\n")
-    with pytest.raises(InputError, match="nobone"):
-        read_asf_amc(asf, amc)
