@@ -118,9 +118,8 @@ def run_demo(
         Where everything went, stage times in seconds, and the report's per-method summary.
     """
     from clone.report import make_report
+    from clone.synth import get_character, save_performance
     from clone.train_ref import TrainConfig, train_reference
-    from retarget.world.appearance import get_character
-    from retarget.world.render import save_performance
 
     say = stage or (lambda text: log.info(text))
     out = Path(out)
