@@ -35,9 +35,13 @@ import numpy as np
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 from pose_io.measures import (
+    PCK_ALPHAS,
     as_layout,
     check_joints,
     limb_lengths,
+    pck_hits,
+    pose_error,
+    pose_error_terms,
     skeleton_height,
 )
 from pose_io.track import PoseTrack
@@ -45,7 +49,6 @@ from pose_io.track import PoseTrack
 log = logging.getLogger(__name__)
 
 FEET = ("l_ankle", "r_ankle")
-PCK_ALPHAS = (0.05, 0.1)
 
 
 @dataclass(frozen=True)
@@ -336,24 +339,16 @@ def gt_pose_scores(
         units); ``pose_rmse_pct``: root of the mean squared joint distance, in % of height; ``pck_<alpha>``:
         share of joints closer than ``alpha * height``. Per-frame curves of the same names.
     """
-    pred = np.asarray(pred, dtype=np.float64)
-    gt = np.asarray(gt, dtype=np.float64)
-    if pred.shape != gt.shape or pred.ndim != 3 or pred.shape[2] != 2:
-        raise InputError(
-            f"ground-truth poses: shape {gt.shape} does not match the driven track's {pred.shape}"
-        )
-    if not height > 0:
-        raise InputError(f"ground-truth poses: height must be positive, got {height}")
-    diff = (pred - gt) / height  # [T, J, 2] in heights
-    dist = np.linalg.norm(diff, axis=-1)  # [T, J], NaN where either is missing
-    sq = diff.reshape(len(diff), -1) ** 2  # [T, 2J]
-    per_frame = {"pose_mse": _row_means(sq), "pose_rmse_pct": np.sqrt(_row_means(dist**2)) * 100.0}
-    summary = {"pose_mse": _mean(sq), "pose_rmse_pct": float(np.sqrt(_mean(dist**2)) * 100.0)}
+    try:
+        squared, dist = pose_error_terms(pred, gt, height)  # [T, 2J], [T, J] in heights
+    except InputError as exc:
+        raise InputError(f"ground-truth poses: {str(exc).removeprefix('pose error: ')}") from None
+    total = pose_error(pred, gt, height, tuple(alphas))
+    per_frame = {"pose_mse": _row_means(squared), "pose_rmse_pct": np.sqrt(_row_means(dist**2)) * 100.0}
+    summary = {"pose_mse": total.pop("mse"), "pose_rmse_pct": total.pop("rmse_pct")}
     for alpha in alphas:
-        with np.errstate(invalid="ignore"):
-            hit = np.where(np.isnan(dist), np.nan, (dist <= alpha).astype(np.float64))
-        per_frame[f"pck_{alpha:g}"] = _row_means(hit)
-        summary[f"pck_{alpha:g}"] = _mean(hit)
+        per_frame[f"pck_{alpha:g}"] = _row_means(pck_hits(dist, alpha))
+    summary.update(total)
     return Scores(per_frame, summary)
 
 

@@ -154,3 +154,66 @@ def amplitude_ratio(joints: np.ndarray, height: float, like: np.ndarray, like_he
     both = ~np.isnan(mine) & ~np.isnan(theirs)
     total = float(theirs[both].sum())
     return float(mine[both].sum()) / total if total > 0 else float("nan")
+
+
+PCK_ALPHAS: tuple[float, ...] = (0.05, 0.1)
+
+
+def pose_error_terms(pred: np.ndarray, truth: np.ndarray, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """Height-normalised differences of two pose tracks: the terms every pose error is built from.
+
+    Args:
+        pred: [T, J, 2] pixels, NaN where missing.
+        truth: [T, J, 2] pixels, NaN where missing.
+        height: the target's body height in pixels.
+
+    Returns:
+        ``(squared, distance)``: [T, 2J] squared coordinate differences and [T, J] joint distances, both in
+        units of ``height``; NaN where either track misses the joint.
+
+    Raises:
+        InputError: shapes differ, or the height is not positive.
+    """
+    pred = np.asarray(pred, dtype=np.float64)
+    truth = np.asarray(truth, dtype=np.float64)
+    if pred.shape != truth.shape or pred.ndim != 3 or pred.shape[2] != 2:
+        raise InputError(f"pose error: shape {truth.shape} of the truth does not match the prediction's {pred.shape}")
+    if not height > 0:
+        raise InputError(f"pose error: height must be positive, got {height}")
+    diff = (pred - truth) / height  # [T, J, 2]
+    return diff.reshape(len(diff), -1) ** 2, np.linalg.norm(diff, axis=-1)
+
+
+def pck_hits(distance: np.ndarray, alpha: float) -> np.ndarray:
+    """1.0 where a joint is closer than ``alpha`` heights to the truth, 0.0 where not, NaN where missing."""
+    with np.errstate(invalid="ignore"):
+        return np.where(np.isnan(distance), np.nan, (distance < alpha).astype(np.float64))
+
+
+def pose_error(
+    pred: np.ndarray, truth: np.ndarray, height: float, alphas: tuple[float, ...] = PCK_ALPHAS
+) -> dict[str, float]:
+    """The paper's pose error and its companions, joints missing in either track left out.
+
+    Args:
+        pred: [T, J, 2] pixels.
+        truth: [T, J, 2] pixels.
+        height: the target's body height in pixels.
+        alphas: PCK thresholds in heights.
+
+    Returns:
+        ``mse``: mean over frames, joints and both coordinates of the squared height-normalised difference
+        (height² units; reports show it x 10³); ``rmse_pct``: root mean squared joint distance in % of the
+        height; ``pck_<alpha>``: share of joints closer than ``alpha`` heights.
+    """
+    squared, distance = pose_error_terms(pred, truth, height)
+    out = {"mse": _nanmean(squared), "rmse_pct": float(np.sqrt(_nanmean(distance**2)) * 100.0)}
+    for alpha in alphas:
+        out[f"pck_{alpha:g}"] = _nanmean(pck_hits(distance, alpha))
+    return out
+
+
+def _nanmean(values: np.ndarray) -> float:
+    values = np.asarray(values, dtype=np.float64)
+    values = values[~np.isnan(values)]
+    return float(values.mean()) if values.size else float("nan")

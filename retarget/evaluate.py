@@ -44,7 +44,7 @@ import torch
 
 from pose_io.atomic import atomic_dir, check_new_output
 from pose_io.errors import InputError
-from pose_io.measures import amplitude_ratio
+from pose_io.measures import amplitude_ratio, pose_error
 from pose_io.track import PoseTrack
 from retarget.baselines import global_scale_retarget, limb_scale_retarget
 from retarget.preprocess import ROOT_INDEX, body15_track, joints_to_channels, prepare_track
@@ -151,13 +151,12 @@ def pose_errors(pred: np.ndarray, truth: np.ndarray, height: float) -> dict[str,
         share of joints closer than that share of the height; ``amplitude``: the prediction's range of
         motion over the truth's (:func:`pose_io.measures.amplitude_ratio`; 1 = neither damped nor exaggerated).
     """
-    e = (np.asarray(pred, np.float64) - np.asarray(truth, np.float64)) / height  # [T, J, 2]
-    dist = np.linalg.norm(e, axis=-1)  # [T, J]
+    scores = pose_error(pred, truth, height, (0.05, 0.1))
     return {
-        "mse_x1e3": float(np.mean(e**2) * 1e3),
-        "rmse_pct": float(np.sqrt(np.mean(dist**2)) * 100),
-        "pck_0.05": float(np.mean(dist < 0.05)),
-        "pck_0.1": float(np.mean(dist < 0.1)),
+        "mse_x1e3": scores["mse"] * 1e3,
+        "rmse_pct": scores["rmse_pct"],
+        "pck_0.05": scores["pck_0.05"],
+        "pck_0.1": scores["pck_0.1"],
         "amplitude": amplitude_ratio(pred, height, truth, height),
     }
 
