@@ -19,7 +19,7 @@ import torch.nn.functional as F
 
 from retarget.augment import COMBOS, MOTION, SKELETON, VIEW, combo_index
 from retarget.model import RetargetNet
-from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints, velocity_channels
+from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints, pose_channels, velocity_channels
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,9 @@ class LossConfig:
         triplet_weight: its weight.
         foot_weight: weight of the foot-velocity loss (0 = off).
         trajectory_weight: weight of the integrated root-trajectory loss (0 = off; not in the paper).
+        spread_weight: weight of the range-of-motion loss (0 = off; not in the paper): the spread over time
+            of every output channel should match the truth's. Where a 2D input leaves the motion ambiguous,
+            the squared error alone is smallest for an average of the candidates, a damped motion.
     """
 
     cross: bool = True
@@ -41,6 +44,7 @@ class LossConfig:
     triplet_weight: float = 0.1
     foot_weight: float = 0.5
     trajectory_weight: float = 0.0
+    spread_weight: float = 0.0
 
 
 # Ablations of the paper's objective, by name.
@@ -80,6 +84,11 @@ def trajectory_error(out: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
     drift = torch.cumsum(velocity_channels(out) - velocity_channels(truth), dim=-1)  # [B, 2, T]
     drift = drift - drift.mean(dim=-1, keepdim=True)
     return (drift**2).mean(dim=(1, 2)) / out.shape[-1]
+
+
+def spread_error(out: torch.Tensor, truth: torch.Tensor) -> torch.Tensor:
+    """Squared difference of the temporal spread (std over time) of every pose channel: [B, 30, T] x2 -> [B]."""
+    return ((pose_channels(out).std(dim=-1) - pose_channels(truth).std(dim=-1)) ** 2).mean(dim=1)
 
 
 def used_combos(model: RetargetNet, cross: bool) -> list[int]:
@@ -147,6 +156,9 @@ def objective(
     if config.trajectory_weight > 0:
         path = trajectory_error(out.flatten(0, 1), truth.flatten(0, 1)).reshape(len(combos), -1)
         losses["trajectory"] = config.trajectory_weight * path.mean(dim=1).sum()
+    if config.spread_weight > 0:
+        spread = spread_error(out.flatten(0, 1), truth.flatten(0, 1)).reshape(len(combos), -1)
+        losses["spread"] = config.spread_weight * spread.mean(dim=1).sum()
     if config.triplet:
         losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
     losses["total"] = sum(losses.values())

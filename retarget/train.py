@@ -14,13 +14,12 @@ The split interface used here (the motion world provides it)::
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import dataclasses
 import logging
 import math
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -45,10 +44,10 @@ from retarget.preprocess import (
     prepare_track,
     row_statistics,
 )
-from retarget.runtime import resolve_device
 
 log = logging.getLogger(__name__)
 
+CPU = torch.device("cpu")
 DEFAULT_EPOCHS = 300  # the authors' schedule, used when neither epochs nor minutes are given
 
 
@@ -375,6 +374,29 @@ def evaluate(
 
 
 @dataclass(frozen=True)
+class TrainProgress:
+    """Where a training run stands, passed to a progress callback after every step and every epoch.
+
+    Attributes:
+        epoch: the current epoch, counted from 1.
+        step: steps done in this epoch.
+        steps_per_epoch: steps an epoch has.
+        global_step: steps done in total (over resumed runs too).
+        losses: the last step's loss terms, or at the end of an epoch (``step == steps_per_epoch``) the
+            epoch's record (train means, ``val_*`` validation losses).
+    """
+
+    epoch: int
+    step: int
+    steps_per_epoch: int
+    global_step: int
+    losses: dict[str, float]
+
+
+ProgressFn = Callable[[TrainProgress], None]
+
+
+@dataclass(frozen=True)
 class TrainSummary:
     """What a training run did.
 
@@ -398,13 +420,13 @@ def fit(
     val_split: WorldSplit | None,
     out: str | Path,
     config: TrainConfig = TrainConfig(),
-    device: str | torch.device = "cpu",
+    device: torch.device = CPU,
     real_tracks: Sequence[PoseTrack] = (),
     epochs: int | None = None,
     minutes: float | None = None,
     resume: bool = False,
     num_workers: int = 0,
-    progress: bool = False,
+    progress: ProgressFn | None = None,
     init: RetargetWeights | None = None,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
@@ -414,13 +436,13 @@ def fit(
         val_split: validation split (None: no validation).
         out: checkpoint file; must not exist unless ``resume``.
         config: training settings.
-        device: torch device or its name ("auto", "cpu", "cuda[:N]").
+        device: where to train (the command line resolves ``--device``).
         real_tracks: unlabelled real tracks (self-reconstruction only).
         epochs: total epochs to reach; None = until ``minutes`` run out, or 300 when both are None.
         minutes: wall-clock budget of this call.
         resume: continue the run stored in ``out``.
         num_workers: data-loader worker processes.
-        progress: show a rich progress bar.
+        progress: called after every step and every epoch (the library draws no bar).
         init: weights to start from (ours or the authors'; their statistics are kept, since the
             weights are tied to them); ignored with ``resume``.
 
@@ -431,7 +453,7 @@ def fit(
         InputError: ``out`` exists without ``resume``, or holds a run with other settings.
     """
     out = Path(out)
-    dev = resolve_device(device) if isinstance(device, str) else device
+    dev = torch.device(device)
     target_epochs = epochs if epochs is not None else (DEFAULT_EPOCHS if minutes is None else math.inf)
     deadline = time.monotonic() + 60.0 * minutes if minutes is not None else math.inf
     started = time.monotonic()
@@ -496,50 +518,53 @@ def fit(
             "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
         })
 
+    def report(losses: dict[str, float]) -> None:
+        if progress is not None:
+            progress(TrainProgress(epoch + 1, step_in_epoch, steps_per_epoch, global_step, losses))
+
     stopped = "epochs"
-    with _progress_bar(progress) as bar:
-        while epoch < target_epochs:
-            dataset.epoch = epoch
-            task = bar.add_task(f"epoch {epoch + 1}", total=steps_per_epoch, completed=step_in_epoch, losses="")
-            sums: dict[str, float] = {}
-            counted = 0
-            loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers)
-            out_of_time = False
-            for batch in loader:
-                batch = {k: v.to(dev) for k, v in batch.items()}
-                real_batch = None
-                if real is not None and len(real):
-                    pick = real_rng.choice(len(real), min(config.real_batch_size, len(real)), replace=False)
-                    real_batch = real[torch.from_numpy(pick)].to(dev)
-                losses = train_step(model, optimizer, batch, stats, config, generator, real_batch)
-                for k, v in losses.items():
-                    sums[k] = sums.get(k, 0.0) + v
-                counted += 1
-                step_in_epoch += 1
-                global_step += 1
-                bar.update(task, advance=1, losses=_format(losses))
-                if time.monotonic() > deadline and step_in_epoch < steps_per_epoch:
-                    out_of_time = True
-                    break
-            if out_of_time:
-                save()
-                stopped = "time"
-                log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
+    while epoch < target_epochs:
+        dataset.epoch = epoch
+        sums: dict[str, float] = {}
+        counted = 0
+        loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers)
+        out_of_time = False
+        for batch in loader:
+            batch = {k: v.to(dev) for k, v in batch.items()}
+            real_batch = None
+            if real is not None and len(real):
+                pick = real_rng.choice(len(real), min(config.real_batch_size, len(real)), replace=False)
+                real_batch = real[torch.from_numpy(pick)].to(dev)
+            losses = train_step(model, optimizer, batch, stats, config, generator, real_batch)
+            for k, v in losses.items():
+                sums[k] = sums.get(k, 0.0) + v
+            counted += 1
+            step_in_epoch += 1
+            global_step += 1
+            report(losses)
+            if time.monotonic() > deadline and step_in_epoch < steps_per_epoch:
+                out_of_time = True
                 break
-            epoch += 1
-            step_in_epoch = 0
-            scheduler.step()
-            record = {"epoch": float(epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
-            if val is not None:
-                record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config).items()})
-            record["seconds"] = elapsed_before + time.monotonic() - started
-            history.append(record)
+        if out_of_time:
             save()
-            bar.update(task, description=f"epoch {epoch} done", losses=_format(record, prefix="val_"))
-            log.info("epoch %d: %s", epoch, _format(record))
-            if time.monotonic() > deadline:
-                stopped = "time" if epoch < target_epochs else "epochs"
-                break
+            stopped = "time"
+            log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
+            break
+        epoch += 1
+        step_in_epoch = 0
+        scheduler.step()
+        record = {"epoch": float(epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
+        if val is not None:
+            record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config).items()})
+        record["seconds"] = elapsed_before + time.monotonic() - started
+        history.append(record)
+        save()
+        if progress is not None:
+            progress(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
+        log.info("epoch %d: %s", epoch, _format(record))
+        if time.monotonic() > deadline:
+            stopped = "time" if epoch < target_epochs else "epochs"
+            break
     return TrainSummary(out, epoch, global_step, stopped, history)
 
 
@@ -589,28 +614,6 @@ def _format(losses: dict[str, float], prefix: str = "") -> str:
     return " ".join(f"{k}={losses[k]:.4f}" for k in keys)
 
 
-class _NoBar:
-    """Stands in for a rich Progress when no bar is wanted."""
-
-    def add_task(self, *args: Any, **kwargs: Any) -> int:
-        return 0
-
-    def update(self, *args: Any, **kwargs: Any) -> None:
-        return None
-
-
-def _progress_bar(enabled: bool) -> Any:
-    if not enabled:
-        return contextlib.nullcontext(_NoBar())
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    return Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-        TextColumn("{task.fields[losses]}"), console=Console(stderr=True), transient=False,
-    )
-
-
 def train(
     mocap_dir: str | Path,
     out: str | Path,
@@ -618,12 +621,12 @@ def train(
     cache_dir: str | Path | None = None,
     real_dir: str | Path | None = None,
     config: TrainConfig = TrainConfig(),
-    device: str = "auto",
+    device: torch.device = CPU,
     epochs: int | None = None,
     minutes: float | None = None,
     resume: bool = False,
     num_workers: int = 0,
-    progress: bool = True,
+    progress: ProgressFn | None = None,
     init: str | Path | None = None,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
@@ -634,12 +637,12 @@ def train(
         cache_dir: where the world is cached (default: the world's, ``~/.cache/clone2d/world``).
         real_dir: optional folder of OpenPose folders (unlabelled real tracks).
         config: training settings.
-        device: "auto", "cpu", "cuda" or "cuda:N".
+        device: where to train.
         epochs: total epochs (see :func:`fit`).
         minutes: time budget of this call.
         resume: continue the run in ``out``.
         num_workers: data-loader worker processes (cutting world windows overlaps the network's work).
-        progress: show a progress bar.
+        progress: callback (see :func:`fit`).
         init: checkpoint to start from: ours, or the authors' ``pretrained_*.pth`` with its statistics.
     """
     from retarget.world import MotionWorld
@@ -649,14 +652,10 @@ def train(
         raise InputError(f"{out}: nothing to resume (no such checkpoint)")
     if not resume:
         _require_new(out)
-    try:
-        dev = resolve_device(device)
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
     start = load_weights(init) if init is not None and not resume else None
     real = read_real_tracks(real_dir) if real_dir is not None else []
     world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
     return fit(
-        world.split("train"), world.split("val"), out, config, dev, real, epochs, minutes, resume,
+        world.split("train"), world.split("val"), out, config, device, real, epochs, minutes, resume,
         num_workers=num_workers, progress=progress, init=start,
     )

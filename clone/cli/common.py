@@ -45,3 +45,19 @@ def setup_logging(verbose: bool) -> None:
 
 def device_option() -> str:
     return typer.Option("auto", "--device", help="auto | cpu | cuda | cuda:N")
+
+
+def resolve_device_option(spec: str, threads: int | None = None):  # -> torch.device
+    """Resolve ``--device`` at the command-line edge (InputError on a bad one); on CPU set torch's threads.
+
+    Library functions take the resulting ``torch.device``; none of them resolves "auto" itself.
+    """
+    from retarget.runtime import configure_threads, resolve_device
+
+    try:
+        device = resolve_device(spec)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if device.type == "cpu":
+        configure_threads(threads)
+    return device

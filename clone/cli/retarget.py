@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, user_errors
+from clone.cli.common import console, resolve_device_option, user_errors
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -105,29 +105,44 @@ def train(
     foot_weight: Annotated[float, typer.Option("--foot-weight", min=0.0, help="Weight of the foot-velocity loss.")] = 0.5,
     triplet_weight: Annotated[float, typer.Option("--triplet-weight", min=0.0, help="Weight of the triplet loss.")] = 0.1,
     triplet_margin: Annotated[float, typer.Option("--triplet-margin", min=0.0, help="Margin of the triplet loss.")] = 0.3,
+    spread_weight: Annotated[
+        float, typer.Option("--spread-weight", min=0.0, help="Weight of the range-of-motion loss (0 = the paper).")
+    ] = 0.0,
 ) -> None:
     """Train the retargeting network on the motion world built from --mocap."""
     import dataclasses
 
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     from pose_io.errors import InputError
     from retarget.losses import ablation_config
-    from retarget.runtime import configure_threads
-    from retarget.train import TrainConfig
+    from retarget.train import TrainConfig, TrainProgress
     from retarget.train import train as run_training
 
     try:
         loss = dataclasses.replace(
             ablation_config(ablation), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
-            triplet_weight=triplet_weight, triplet_margin=triplet_margin,
+            triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
         )
         config = TrainConfig(variant=variant, loss=loss, seed=seed, lr=lr)
     except ValueError as exc:
         raise InputError(str(exc)) from None
-    configure_threads(threads)
-    summary = run_training(
-        mocap, out, cache_dir=cache, real_dir=real, config=config, device=device, epochs=epochs,
-        minutes=minutes, resume=resume, num_workers=workers, init=init,
-    )
+    dev = resolve_device_option(device, threads)
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  TextColumn("{task.fields[losses]}"), console=console) as bar:  # fmt: skip
+        task = bar.add_task("epoch 1", total=None, losses="")
+
+        def update(p: TrainProgress) -> None:
+            shown = {k: v for k, v in p.losses.items() if k not in ("epoch", "seconds")}
+            if p.step == p.steps_per_epoch and "epoch" in p.losses:  # the epoch's record
+                shown = {k: v for k, v in shown.items() if k.startswith("val_")} or shown
+            text = " ".join(f"{k}={v:.3f}" for k, v in shown.items())
+            bar.update(task, description=f"epoch {p.epoch}", completed=p.step, total=p.steps_per_epoch, losses=text)
+
+        summary = run_training(
+            mocap, out, cache_dir=cache, real_dir=real, config=config, device=dev, epochs=epochs,
+            minutes=minutes, resume=resume, num_workers=workers, init=init, progress=update,
+        )
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
     console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
 

@@ -197,8 +197,7 @@ def test_train_on_a_motion_world_built_from_mocap(shared_dir, tmp_path):
     for name in ("dataset-1/dataset-1_walk_normal_001", "dataset-1/dataset-1_bow_normal_001",
                  "dataset-2/dataset-2_walk_normal_001", "dataset-2/dataset-2_walk_normal_002"):
         shutil.copy(shared_dir / "mocap" / "bandai_namco" / f"{name}.bvh.gz", mocap)
-    summary = train(mocap, tmp_path / "r.pt", cache_dir=tmp_path / "cache", config=TINY, device="cpu", epochs=1,
-                    progress=False)
+    summary = train(mocap, tmp_path / "r.pt", cache_dir=tmp_path / "cache", config=TINY, epochs=1)
     assert summary.epochs == 1 and "val_cross" in summary.history[0]
     assert load_checkpoint(tmp_path / "r.pt").training["epoch"] == 1
 
@@ -245,3 +244,13 @@ def character_heights_scaled(split, scales):
 
     return np.array([np.median(skeleton_heights(np.stack([split.window(m, c, 0) * scales[c] for m in range(2)])))
                      for c in range(split.num_characters)])  # fmt: skip
+
+
+def test_progress_is_a_callback_of_every_step_and_epoch(tmp_path):
+    seen = []
+    fit(FakeSplit(), FakeSplit(seed=1), tmp_path / "r.pt", TINY, epochs=2, progress=seen.append)
+    steps = [p for p in seen if "epoch" not in p.losses]
+    ends = [p for p in seen if "epoch" in p.losses]
+    assert [p.global_step for p in steps] == [1, 2, 3, 4]
+    assert [(p.epoch, p.step, p.steps_per_epoch) for p in ends] == [(1, 2, 2), (2, 2, 2)]
+    assert "val_total" in ends[-1].losses and "total" in steps[0].losses
