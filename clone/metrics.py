@@ -35,6 +35,7 @@ import numpy as np
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 from pose_io.measures import (
+    ANKLES,
     PCK_ALPHAS,
     as_layout,
     check_joints,
@@ -48,7 +49,6 @@ from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
 
-FEET = ("l_ankle", "r_ankle")
 
 
 @dataclass(frozen=True)
@@ -199,10 +199,10 @@ def foot_contacts(
         speed_tol: the largest vertical move (heights per frame) of an ankle that touches.
 
     Returns:
-        [T, 2] bool, columns in ``FEET`` order.
+        [T, 2] bool, columns in ``ANKLES`` order.
     """
     layout = as_layout(layout)
-    feet = check_joints(joints, layout, "foot contacts")[:, layout.indices(FEET)]  # [T, 2, 2]
+    feet = check_joints(joints, layout, "foot contacts")[:, layout.indices(ANKLES)]  # [T, 2, 2]
     y = feet[..., 1]  # [T, 2]
     contact = np.zeros(y.shape, dtype=bool)
     for f in range(y.shape[1]):
@@ -231,7 +231,7 @@ def foot_slide(
     """
     layout = as_layout(layout)
     contact = foot_contacts(joints, height, layout, window, height_tol, speed_tol)
-    x = np.asarray(joints, dtype=np.float64)[:, layout.indices(FEET), 0]  # [T, 2]
+    x = np.asarray(joints, dtype=np.float64)[:, layout.indices(ANKLES), 0]  # [T, 2]
     slide = np.full(x.shape, np.nan)
     both = contact[1:] & contact[:-1]
     slide[1:][both] = np.abs(np.diff(x, axis=0))[both]

@@ -151,6 +151,50 @@ def smooth(track: PoseTrack, sigma: float) -> PoseTrack:
     return track.replace(joints=out.astype(np.float32))
 
 
+def hold_fill(joints: np.ndarray) -> np.ndarray:
+    """Fill missing joints from the previous frame, then leading gaps from the next (the authors' rule).
+
+    Args:
+        joints: [T, J, 2] with NaN where missing; every joint seen at least once.
+
+    Returns:
+        [T, J, 2] without NaN.
+    """
+    t = joints.shape[0]
+    seen = ~np.isnan(joints[..., 0])  # [T, J]
+    frame = np.where(seen, np.arange(t)[:, None], -1)
+    last = np.maximum.accumulate(frame, axis=0)  # index of the last seen frame, -1 before the first
+    first = np.argmax(seen, axis=0)  # [J] first seen frame
+    source = np.where(last >= 0, last, first[None, :])  # [T, J]
+    return np.take_along_axis(joints, source[..., None], axis=0)
+
+
+def smooth_joints(joints: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian filter over time (axis 0) of complete joints, reflecting at the ends (the authors' rule).
+
+    Unlike :func:`smooth` (tracks with gaps, confidence-weighted), every value must be present.
+
+    Args:
+        joints: [T, ...] without NaN.
+        sigma: standard deviation in frames (0 = a copy).
+    """
+    if sigma <= 0:
+        return joints.copy()
+    from scipy.ndimage import gaussian_filter1d
+
+    return gaussian_filter1d(joints, sigma=sigma, axis=0, mode="reflect")
+
+
+def interpolate_missing(values: np.ndarray) -> np.ndarray:
+    """[T] values with NaNs filled linearly in time (held constant beyond the ends); all-NaN stays NaN."""
+    values = np.asarray(values, dtype=np.float64)
+    ok = np.isfinite(values)
+    if ok.all() or not ok.any():
+        return values.copy()
+    t = np.arange(len(values))
+    return np.interp(t, t[ok], values[ok])
+
+
 def resample(track: PoseTrack, fps: float) -> PoseTrack:
     """The track at another frame rate, by linear interpolation in time.
 

@@ -45,7 +45,7 @@ def draw_pose(
     for a, b in layout.limb_indices:
         if ok[a] and ok[b]:
             cv2.line(canvas, tuple(pts[a]), tuple(pts[b]), layout.colors[b], thickness, line_type, _SHIFT)
-    radius = int(round(max(1.0, thickness * 1.2) * _SCALE))
+    radius = round(max(1.0, thickness * 1.2) * _SCALE)
     for j in np.flatnonzero(ok):
         cv2.circle(canvas, tuple(pts[j]), radius, layout.colors[j], -1, line_type, _SHIFT)
     return canvas

@@ -15,6 +15,9 @@ from pose_io.layouts import JointLayout, get_layout
 
 log = logging.getLogger(__name__)
 
+# The ankle pair, in the order every per-foot array uses.
+ANKLES: tuple[str, ...] = ("l_ankle", "r_ankle")
+
 # The bones whose lengths add up to a standing height: head, trunk, and the two legs (averaged).
 _HEIGHT_BONES: tuple[tuple[str, str], ...] = (("nose", "neck"), ("neck", "mid_hip")) + tuple(
     (f"{s}_{a}", f"{s}_{b}") for s in ("l", "r") for a, b in (("hip", "knee"), ("knee", "ankle"))
@@ -47,6 +50,39 @@ def segment_lengths(joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     joints = np.asarray(joints, dtype=np.float64)
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     return np.linalg.norm(joints[..., pairs[:, 0], :] - joints[..., pairs[:, 1], :], axis=-1)
+
+
+def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
+    """The lower ankle of each frame (the foot on the ground).
+
+    Args:
+        joints: [T, J, 2] image pixels, NaN where missing.
+        layout: layout of ``joints`` (must have ``l_ankle`` and ``r_ankle``).
+
+    Returns:
+        [T, 2]; NaN where both ankles are missing.
+    """
+    ankles = joints[:, layout.indices(ANKLES)]  # [T, 2 ankles, 2]
+    y = np.where(np.isnan(ankles[..., 1]), -np.inf, ankles[..., 1])  # [T, 2]
+    lower = np.argmax(y, axis=1)  # [T]
+    out = ankles[np.arange(len(joints)), lower].astype(np.float64)  # [T, 2]
+    out[~np.isfinite(y).any(axis=1)] = np.nan
+    return out
+
+
+def apparent_heights(joints: np.ndarray, foot_y: np.ndarray) -> np.ndarray:
+    """Per-frame height: from the topmost visible joint down to the lower ankle.
+
+    Args:
+        joints: [T, J, 2] image pixels, NaN where missing.
+        foot_y: [T] lower-ankle y.
+
+    Returns:
+        [T]; NaN where the foot is missing.
+    """
+    y = joints[..., 1].astype(np.float64)  # [T, J]
+    top = np.min(np.where(np.isnan(y), np.inf, y), axis=1)  # [T]
+    return np.where(np.isfinite(top) & np.isfinite(foot_y), foot_y - top, np.nan)
 
 
 def limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:

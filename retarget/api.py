@@ -22,6 +22,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from pose_io.clean import smooth_joints
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.checkpoint import RetargetWeights, load_weights
@@ -37,7 +38,6 @@ from retarget.preprocess import (
     place,
     placement_of,
     prepare_track,
-    smooth,
     to_body15,
     track_scale,
 )
@@ -234,7 +234,7 @@ class Retargeter:
         y = self._decode_track(x, reference)  # [1, 30, T]
         joints = channels_to_joints(y.double().cpu(), self.stats)[0].numpy()  # [T, 15, 2] canvas
         joints = joints / self._reference_scale(reference)  # reference pixels
-        joints = place(smooth(joints, self.preprocess.output_sigma), reference.placement)
+        joints = place(smooth_joints(joints, self.preprocess.output_sigma), reference.placement)
         return body15_track(joints, motion.fps, reference.image_size)
 
     def _reference_scale(self, reference: ReferenceCodes) -> float:

@@ -19,9 +19,10 @@ from itertools import permutations
 
 import numpy as np
 
+from pose_io.clean import smooth_joints
 from pose_io.measures import amplitude_ratio, motion_spread, reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
-from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15, smooth
+from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15
 
 Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
 
@@ -42,7 +43,7 @@ def pair_scores(
     motion: PoseTrack, reference: PoseTrack, output: PoseTrack, sigma: float = 2.0
 ) -> dict[str, float | dict]:
     """What retargeting ``motion`` onto ``reference`` kept, measured on ``output`` (see the module docstring)."""
-    drv = smooth(filled_body15(motion, "motion track"), sigma)
+    drv = smooth_joints(filled_body15(motion, "motion track"), sigma)
     ref = filled_body15(reference, "reference track")
     out = np.asarray(output.joints, dtype=np.float64)
     h_drv, h_ref, h_out = (skeleton_height(j, LAYOUT) for j in (drv, ref, out))

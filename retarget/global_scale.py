@@ -26,10 +26,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from pose_io.clean import interpolate_missing
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
-
-ANKLES = ("l_ankle", "r_ankle")
+from pose_io.measures import apparent_heights, foot_points
 
 
 @dataclass(frozen=True)
@@ -66,39 +66,6 @@ class ScaleStats:
         return cls(**{k: float(d[k]) for k in keys})
 
 
-def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
-    """The lower ankle of each frame (the foot on the ground).
-
-    Args:
-        joints: [T, J, 2] image pixels, NaN where missing.
-        layout: layout of ``joints`` (must have ``l_ankle`` and ``r_ankle``).
-
-    Returns:
-        [T, 2]; NaN where both ankles are missing.
-    """
-    ankles = joints[:, layout.indices(ANKLES)]  # [T, 2 ankles, 2]
-    y = np.where(np.isnan(ankles[..., 1]), -np.inf, ankles[..., 1])  # [T, 2]
-    lower = np.argmax(y, axis=1)  # [T]
-    out = ankles[np.arange(len(joints)), lower].astype(np.float64)  # [T, 2]
-    out[~np.isfinite(y).any(axis=1)] = np.nan
-    return out
-
-
-def apparent_heights(joints: np.ndarray, foot_y: np.ndarray) -> np.ndarray:
-    """Per-frame height: from the topmost visible joint down to the lower ankle.
-
-    Args:
-        joints: [T, J, 2] image pixels, NaN where missing.
-        foot_y: [T] lower-ankle y.
-
-    Returns:
-        [T]; NaN where the foot is missing.
-    """
-    y = joints[..., 1].astype(np.float64)  # [T, J]
-    top = np.min(np.where(np.isnan(y), np.inf, y), axis=1)  # [T]
-    return np.where(np.isfinite(top) & np.isfinite(foot_y), foot_y - top, np.nan)
-
-
 def scale_stats(
     joints: np.ndarray, layout: JointLayout, quantile: float = 0.02, band: float = 0.1, tall: float = 0.9
 ) -> ScaleStats:
@@ -129,16 +96,6 @@ def scale_stats(
         height_close=float(max(h_close, 1e-3)), center_x=float(np.median(foot[ok, 0])),
         foot_median=float(np.median(fy)),
     )
-
-
-def interpolate_missing(values: np.ndarray) -> np.ndarray:
-    """[T] values with NaNs filled linearly in time (held constant beyond the ends); all-NaN stays NaN."""
-    values = np.asarray(values, dtype=np.float64)
-    ok = np.isfinite(values)
-    if ok.all() or not ok.any():
-        return values.copy()
-    t = np.arange(len(values))
-    return np.interp(t, t[ok], values[ok])
 
 
 def global_scale_params(

@@ -17,9 +17,10 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from pose_io.measures import ANKLES
 from retarget.augment import COMBOS, MOTION, SKELETON, VIEW, combo_index
 from retarget.model import RetargetNet
-from retarget.preprocess import FEET, LAYOUT, NormStats, channels_to_joints, pose_channels, velocity_channels
+from retarget.preprocess import LAYOUT, NormStats, channels_to_joints, pose_channels, velocity_channels
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ def foot_velocity(x: torch.Tensor, stats: NormStats, min_scale: float = 1.0) -> 
     Those are the units of the velocity channels, so the term weighs like the reconstruction; the std
     is floored at ``min_scale`` canvas pixels per frame for data whose root hardly moves.
     """
-    joints = channels_to_joints(x, stats)[:, :, LAYOUT.indices(FEET)]  # [B, T, 2, 2]
+    joints = channels_to_joints(x, stats)[:, :, LAYOUT.indices(ANKLES)]  # [B, T, 2, 2]
     scale = torch.tensor(np.maximum(stats.velocity_std, min_scale), dtype=x.dtype, device=x.device)
     return (joints[:, 1:] - joints[:, :-1]) / scale
 

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-from scipy.ndimage import gaussian_filter1d
 
+from pose_io.clean import hold_fill, smooth_joints
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, get_layout, require_convertible
-from pose_io.measures import skeleton_height
+from pose_io.measures import foot_points, skeleton_height, skeleton_heights
 from pose_io.track import PoseTrack
 
 LAYOUT = BODY15
@@ -39,7 +39,6 @@ LOCAL_INDEX: tuple[int, ...] = tuple(LAYOUT.indices(LOCAL_JOINTS))
 NUM_ROWS = len(LOCAL_JOINTS) + 1  # + the root velocity row
 NUM_CHANNELS = 2 * NUM_ROWS  # 30
 POSE_CHANNELS = 2 * len(LOCAL_JOINTS)  # 28
-FEET: tuple[str, ...] = ("r_ankle", "l_ankle")
 
 
 @dataclass(frozen=True)
@@ -187,31 +186,6 @@ def to_body15(track: PoseTrack, name: str = "track") -> PoseTrack:
     return track.to_layout(LAYOUT.name)
 
 
-def hold_fill(joints: np.ndarray) -> np.ndarray:
-    """Fill missing joints from the previous frame, then leading gaps from the next (the authors' rule).
-
-    Args:
-        joints: [T, J, 2] with NaN where missing; every joint seen at least once.
-
-    Returns:
-        [T, J, 2] without NaN.
-    """
-    t = joints.shape[0]
-    seen = ~np.isnan(joints[..., 0])  # [T, J]
-    frame = np.where(seen, np.arange(t)[:, None], -1)
-    last = np.maximum.accumulate(frame, axis=0)  # index of the last seen frame, -1 before the first
-    first = np.argmax(seen, axis=0)  # [J] first seen frame
-    source = np.where(last >= 0, last, first[None, :])  # [T, J]
-    return np.take_along_axis(joints, source[..., None], axis=0)
-
-
-def smooth(joints: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian filter over time (axis 0), reflecting at the ends; ``sigma`` in frames (0 = copy)."""
-    if sigma <= 0:
-        return joints.copy()
-    return gaussian_filter1d(joints, sigma=sigma, axis=0, mode="reflect")
-
-
 def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig, joints: np.ndarray | None = None) -> float:
     """Factor from a track's pixels to the network canvas.
 
@@ -268,7 +242,7 @@ def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track
         InputError: see :func:`filled_body15`.
     """
     filled = filled_body15(track, name)
-    return smooth(filled, config.input_sigma) * track_scale(track, config, name)
+    return smooth_joints(filled, config.input_sigma) * track_scale(track, config, name)
 
 
 def track_scale(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> float:
@@ -292,25 +266,12 @@ def body15_track(joints: np.ndarray, fps: float, image_size: tuple[int, int]) ->
 # Where a person stands: height, root position, ground line.
 
 
-def pose_heights(joints: np.ndarray) -> np.ndarray:
-    """[T, J, 2] -> [T] vertical extent of each pose (NaN-aware; NaN for an empty frame)."""
-    y = joints[..., 1]
-    with _quiet_nan():
-        return np.nanmax(y, axis=1) - np.nanmin(y, axis=1)
-
-
-def ground_heights(joints: np.ndarray) -> np.ndarray:
-    """[T, 15, 2] body15 -> [T] y of the lower ankle (image y grows downwards)."""
-    with _quiet_nan():
-        return np.nanmax(joints[:, LAYOUT.indices(FEET), 1], axis=1)
-
-
 @dataclass(frozen=True)
 class Placement:
     """Where a person stands in their video, in that video's pixels.
 
     Attributes:
-        height: median vertical extent of the pose.
+        height: skeleton height (:func:`pose_io.measures.skeleton_height`).
         root_x: median x of the root (MidHip).
         ground_y: median y of the lower ankle.
     """
@@ -324,12 +285,12 @@ def placement_of(joints: np.ndarray, name: str = "track") -> Placement:
     """Placement statistics of [T, 15, 2] body15 joints (NaN allowed).
 
     Raises:
-        InputError: the root or both ankles are never seen.
+        InputError: the root or both ankles are never seen, or a bone of the height never is.
     """
+    height = float(skeleton_heights(np.asarray(joints, dtype=np.float64)[None], LAYOUT)[0])
     with _quiet_nan():
-        height = float(np.nanmedian(pose_heights(joints)))
         root_x = float(np.nanmedian(joints[:, ROOT_INDEX, 0]))
-        ground_y = float(np.nanmedian(ground_heights(joints)))
+        ground_y = float(np.nanmedian(foot_points(joints, LAYOUT)[:, 1]))
     if not all(np.isfinite(v) for v in (height, root_x, ground_y)):
         raise InputError(f"{name}: cannot tell where the person stands (root or ankles never detected)")
     return Placement(height, root_x, ground_y)

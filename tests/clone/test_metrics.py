@@ -80,8 +80,8 @@ def test_sliding_foot_gives_known_slide():
     slide, contact = metrics.foot_slide(joints, HEIGHT, BODY15, window=9)
     assert contact.all()
     assert np.isnan(slide[0]).all()
-    np.testing.assert_allclose(slide[1:, metrics.FEET.index("r_ankle")], 2.0)
-    np.testing.assert_allclose(slide[1:, metrics.FEET.index("l_ankle")], 0.0)
+    np.testing.assert_allclose(slide[1:, measures.ANKLES.index("r_ankle")], 2.0)
+    np.testing.assert_allclose(slide[1:, measures.ANKLES.index("l_ankle")], 0.0)
     ref = measures.reference_limb_lengths(stand())
     scores = metrics.pose_scores(joints, (400, 400), ref, HEIGHT, window=9)
     assert scores.summary["foot_slide_px"] == pytest.approx(1.0)  # mean over both ankles
@@ -97,13 +97,13 @@ def test_lifted_foot_is_not_in_contact():
     joints[10:40, right, 0] += 3.0 * np.arange(30)
     joints[40:, right, 0] += 90.0
     slide, contact = metrics.foot_slide(joints, HEIGHT, BODY15, window=31)
-    col = metrics.FEET.index("r_ankle")
+    col = measures.ANKLES.index("r_ankle")
     assert contact[:10, col].all() and contact[41:, col].all()
     assert not contact[12:38, col].any()
     np.testing.assert_allclose(slide[1:10, col], 0.0)
     np.testing.assert_allclose(slide[42:, col], 0.0)
     assert np.isnan(slide[12:38, col]).all()
-    assert contact[:, metrics.FEET.index("l_ankle")].all()
+    assert contact[:, measures.ANKLES.index("l_ankle")].all()
 
 
 def test_constant_velocity_has_zero_jitter_and_a_kick_has_known_jitter():

@@ -5,11 +5,13 @@ import pytest
 import torch
 
 from pose_io import InputError, PoseTrack
+from pose_io.clean import hold_fill, smooth_joints
+from pose_io.measures import skeleton_height
 from pose_io.readers import read_track
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.baselines import limb_lengths
-from retarget.preprocess import hold_fill, placement_of, pose_heights, smooth, to_body15
+from retarget.preprocess import placement_of, to_body15
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +32,7 @@ def clips(shared_dir):
 
 def _clean(track: PoseTrack) -> np.ndarray:
     """The track as the network sees it, in its own pixels: filled and smoothed body15."""
-    return smooth(hold_fill(to_body15(track).joints.astype(np.float64)), 2.0)
+    return smooth_joints(hold_fill(to_body15(track).joints.astype(np.float64)), 2.0)
 
 
 def _tiled(track: PoseTrack, frames: int) -> PoseTrack:
@@ -59,7 +61,7 @@ def test_long_tracks_in_windows_match_one_pass(retargeter, clips):
     b = one_pass.retarget(track, reference).joints
     assert len(a) == 700
     rel = lambda j: j - j[:, 8:9]
-    height = np.median(pose_heights(b))
+    height = skeleton_height(b)
     assert np.abs(rel(a) - rel(b)).mean() < 0.002 * height
     assert np.abs(np.diff(a, axis=0)).max() < 1.2 * np.abs(np.diff(b, axis=0)).max()  # no jumps where windows meet
 
@@ -68,7 +70,7 @@ def test_retargeting_onto_its_own_skeleton_and_view_reproduces_the_clip(retarget
     for track in clips.values():
         out = retargeter.retarget(track, retargeter.reference_codes(track)).joints
         truth = _clean(track)
-        height = np.median(pose_heights(truth))
+        height = skeleton_height(truth)
         pose_error = np.linalg.norm((out - out[:, 8:9]) - (truth - truth[:, 8:9]), axis=-1).mean()
         place_error = np.linalg.norm(out - truth, axis=-1).mean()
         # The authors' own reconstruction of these clips is off by 2.3 % (tall) and 2.4 % (small) of the height.
@@ -83,7 +85,7 @@ def test_tall_motion_on_small_skeleton_takes_the_small_limbs(retargeter, clips):
     to_small = np.abs(lengths - limb_lengths(_clean(small), 0.5)).mean()
     to_tall = np.abs(lengths - limb_lengths(_clean(tall), 0.5)).mean()
     assert to_small < 0.25 * to_tall
-    assert np.median(pose_heights(out.joints)) == pytest.approx(np.median(pose_heights(_clean(small))), rel=0.15)
+    assert skeleton_height(out.joints) == pytest.approx(skeleton_height(_clean(small)), rel=0.15)
 
 
 def test_output_stands_where_the_reference_stands(retargeter, clips):

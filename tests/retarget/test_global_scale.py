@@ -2,12 +2,12 @@ import numpy as np
 import pytest
 
 from pose_io import BODY15, InputError
+from pose_io.clean import interpolate_missing
+from pose_io.measures import foot_points
 from retarget.global_scale import (
     ScaleStats,
     apply_global_scale,
-    foot_points,
     global_scale_params,
-    interpolate_missing,
     scale_stats,
 )
 

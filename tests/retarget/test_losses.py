@@ -85,9 +85,9 @@ def test_foot_velocity_is_the_global_ankle_velocity():
     joints[..., 0] = (3.0 * t)[None, :, None]  # everything walks 3 px per frame
     joints[0, :, LAYOUT.index("l_ankle"), 0] = 10.0  # the left ankle stays planted
     stats = NormStats(np.zeros((15, 2)), np.full((15, 2), 2.0))
-    v = foot_velocity(joints_to_channels(joints, stats), stats)  # [1, 5, 2 feet (r, l), 2]
-    torch.testing.assert_close(v[0, :, 0, 0], torch.full((5,), 1.5, dtype=torch.float64))
-    torch.testing.assert_close(v[0, :, 1, 0], torch.zeros(5, dtype=torch.float64))
+    v = foot_velocity(joints_to_channels(joints, stats), stats)  # [1, 5, 2 feet (l, r), 2]
+    torch.testing.assert_close(v[0, :, 1, 0], torch.full((5,), 1.5, dtype=torch.float64))
+    torch.testing.assert_close(v[0, :, 0, 0], torch.zeros(5, dtype=torch.float64))
 
 
 def test_trajectory_error_ignores_a_translation_and_sees_a_drift():

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 import torch
 
+from pose_io.clean import smooth_joints
 from pose_io.readers import read_track
 from retarget.checkpoint import load_official
 from retarget.model import (
@@ -18,7 +19,6 @@ from retarget.preprocess import (
     channels_to_joints,
     joints_to_channels,
     prepare_track,
-    smooth,
 )
 
 CLIPS = ("tall_man", "small_man")
@@ -149,7 +149,7 @@ def test_parity_skeleton_transfer(official, raw, shared_dir, motion, skeleton):
         out = net.model.decode(net.model.encode_motion(inputs[motion]), net.model.encode_body(inputs[skeleton]))
     joints = channels_to_joints(out.double(), net.stats, torch.tensor([256.0, 256.0], dtype=torch.float64))[0]
     expected = np.load(parity / f"skeleton_out_{motion}_motion_{skeleton}_skeleton.npy")
-    np.testing.assert_allclose(smooth(joints.numpy(), 2.0).transpose(1, 2, 0), expected, atol=1e-3)
+    np.testing.assert_allclose(smooth_joints(joints.numpy(), 2.0).transpose(1, 2, 0), expected, atol=1e-3)
 
 
 def test_official_view_model_loads_and_reconstructs(official, raw):

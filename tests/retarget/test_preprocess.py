@@ -3,6 +3,7 @@ import pytest
 import torch
 
 from pose_io import InputError, PoseTrack
+from pose_io.clean import hold_fill
 from pose_io.layouts import LAYOUTS, JointLayout
 from pose_io.readers import read_track
 from retarget.preprocess import (
@@ -13,7 +14,6 @@ from retarget.preprocess import (
     Placement,
     PreprocessConfig,
     channels_to_joints,
-    hold_fill,
     joints_to_channels,
     place,
     placement_of,
