@@ -91,10 +91,13 @@ def limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np
     return segment_lengths(check_joints(joints, layout, "limb lengths"), layout.limb_indices)
 
 
-def reference_limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body15") -> np.ndarray:
-    """[L] a person's length of every limb: the median over the frames of [T, J, 2] joints.
+def reference_limb_lengths(
+    joints: np.ndarray, layout: JointLayout | str = "body15", quantile: float = 0.5
+) -> np.ndarray:
+    """[L] a person's length of every limb: a quantile (the median by default) over the frames of [T, J, 2] joints.
 
-    A limb missing in every frame gets NaN (and is then left out of limb errors), with a warning.
+    A high quantile estimates the unforeshortened 2D length. A limb missing in every frame gets NaN (and is
+    then left out of limb errors), with a warning.
     """
     layout = as_layout(layout)
     lengths = limb_lengths(joints, layout)
@@ -103,7 +106,7 @@ def reference_limb_lengths(joints: np.ndarray, layout: JointLayout | str = "body
         names = [f"{a}-{b}" for (a, b), ok in zip(layout.limbs, seen) if not ok]
         log.warning("limbs never seen, left out of the limb error: %s", ", ".join(names))
     out = np.full(lengths.shape[1], np.nan)
-    out[seen] = np.nanmedian(lengths[:, seen], axis=0)
+    out[seen] = np.nanquantile(lengths[:, seen], quantile, axis=0)
     return out
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
 from retarget.global_scale import apply_global_scale, scale_stats
 from retarget.preprocess import (
@@ -60,12 +61,6 @@ def global_scale_retarget(
     return _output(apply_global_scale(drv, LAYOUT, source, target, min_span=min_depth_range), motion, reference)
 
 
-def limb_lengths(joints: np.ndarray, quantile: float = 0.95) -> np.ndarray:
-    """[T, 15, 2] body15 -> [L] 2D length of every layout limb (``quantile`` over frames)."""
-    a, b = LAYOUT.limb_indices.T
-    return np.quantile(np.linalg.norm(joints[:, b] - joints[:, a], axis=-1), quantile, axis=0)
-
-
 def _leg_length(lengths: np.ndarray) -> float:
     names = {frozenset(pair): i for i, pair in enumerate(LAYOUT.limbs)}
     legs = []
@@ -88,8 +83,8 @@ def limb_scale_retarget(motion: PoseTrack, reference: PoseTrack, length_quantile
     """
     drv = filled_body15(motion, "motion track")
     ref = filled_body15(reference, "reference track")
-    len_d = limb_lengths(drv, length_quantile)
-    len_r = limb_lengths(ref, length_quantile)
+    len_d = reference_limb_lengths(drv, LAYOUT, length_quantile)
+    len_r = reference_limb_lengths(ref, LAYOUT, length_quantile)
     ratio = len_r / np.maximum(len_d, 1e-6)  # [L]
     root = drv[:, ROOT_INDEX]
     out = np.empty_like(drv)

@@ -23,6 +23,7 @@ from clone.reference_model import LAYOUT, file_sha256
 from clone.tensors import to_tensor
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
+from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
 from retarget.global_scale import ScaleStats, scale_stats
 
@@ -148,11 +149,8 @@ def read_reference(
 def track_summary(track: PoseTrack, usable: np.ndarray) -> dict[str, Any]:
     """Plain-data summary of the reference's poses for the model file."""
     layout = track.joint_layout
-    bones = {}
-    for a, b in layout.limbs:
-        d = np.linalg.norm(track.joint(a) - track.joint(b), axis=-1)
-        d = d[np.isfinite(d)]
-        bones[f"{a}-{b}"] = float(np.median(d)) if len(d) else float("nan")
+    lengths = reference_limb_lengths(track.joints, layout)
+    bones = {f"{a}-{b}": float(length) for (a, b), length in zip(layout.limbs, lengths)}
     return {
         "frames": track.num_frames,
         "usable_frames": int(usable.sum()),

@@ -6,11 +6,10 @@ import torch
 
 from pose_io import InputError, PoseTrack
 from pose_io.clean import hold_fill, smooth_joints
-from pose_io.measures import skeleton_height
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.readers import read_track
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
-from retarget.baselines import limb_lengths
 from retarget.preprocess import placement_of, to_body15
 
 
@@ -81,9 +80,9 @@ def test_retargeting_onto_its_own_skeleton_and_view_reproduces_the_clip(retarget
 def test_tall_motion_on_small_skeleton_takes_the_small_limbs(retargeter, clips):
     tall, small = clips["tall_man"], clips["small_man"]
     out = retargeter.retarget(tall, retargeter.reference_codes(small))
-    lengths = limb_lengths(out.joints, 0.5)
-    to_small = np.abs(lengths - limb_lengths(_clean(small), 0.5)).mean()
-    to_tall = np.abs(lengths - limb_lengths(_clean(tall), 0.5)).mean()
+    lengths = reference_limb_lengths(out.joints)
+    to_small = np.abs(lengths - reference_limb_lengths(_clean(small))).mean()
+    to_tall = np.abs(lengths - reference_limb_lengths(_clean(tall))).mean()
     assert to_small < 0.25 * to_tall
     assert skeleton_height(out.joints) == pytest.approx(skeleton_height(_clean(small)), rel=0.15)
 

@@ -3,9 +3,15 @@ import pytest
 
 from pose_io import InputError
 from pose_io.clean import hold_fill
-from pose_io.measures import skeleton_height
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.readers import read_track
-from retarget.baselines import global_scale_retarget, limb_lengths, limb_scale_retarget
+from retarget.baselines import global_scale_retarget, limb_scale_retarget
+from retarget.preprocess import LAYOUT
+
+
+def limb_lengths(joints, quantile=0.95):
+    return reference_limb_lengths(joints, LAYOUT, quantile)
+
 from retarget.preprocess import to_body15
 
 
