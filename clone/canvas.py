@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from enum import Enum
 
 import cv2
 import numpy as np
@@ -24,7 +25,16 @@ from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 
-CANVAS_MODES = ("crop", "full")
+
+class CanvasMode(str, Enum):
+    """Where the canvas sits: a square ``crop`` around the performer or the ``full`` frame letterboxed."""
+
+    CROP = "crop"
+    FULL = "full"
+
+
+# Plain names: a Canvas keeps (and the model file stores) the name, never the enum member.
+CANVAS_MODES = tuple(m.value for m in CanvasMode)
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +36,16 @@ from retarget.global_scale import apply_global_scale, scale_stats
 
 log = logging.getLogger(__name__)
 
-METHODS = ("retarget", "global-scale", "none")
+
+class Method(str, Enum):
+    """How the driver's poses are moved onto the reference (``--method``; see the module docstring)."""
+
+    RETARGET = "retarget"
+    GLOBAL_SCALE = "global-scale"
+    NONE = "none"
+
+
+METHODS = tuple(m.value for m in Method)
 DEFAULT_MODEL = "ref_model.pt"
 
 
@@ -205,7 +215,7 @@ def drive(
     out: str | os.PathLike,
     *,
     model_path: str | os.PathLike = DEFAULT_MODEL,
-    method: str = "retarget",
+    method: Method | str = Method.RETARGET,
     poses_out: str | os.PathLike | None = None,
     side_by_side: bool = False,
     device: torch.device | str = "cpu",
@@ -237,8 +247,10 @@ def drive(
 
     t0 = time.perf_counter()
     out = Path(out)
-    if method not in METHODS:
-        raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}")
+    try:
+        method = Method(method).value  # the plain name from here on: it ends in DriveResult
+    except ValueError:
+        raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}") from None
     if max_gap < 0:
         raise InputError(f"--max-gap must be >= 0, got {max_gap}")
     check_new_output(out, overwrite)

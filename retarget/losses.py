@@ -12,6 +12,7 @@ error lets drift.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 import torch
@@ -48,11 +49,19 @@ class LossConfig:
     spread_weight: float = 0.0
 
 
-# Ablations of the paper's objective, by name.
+class Ablation(str, Enum):
+    """Names of the ablations of the paper's objective (:data:`ABLATIONS`)."""
+
+    FULL = "full"
+    NO_TRIPLET = "no-triplet"
+    RECON_TRIPLET = "recon-triplet"
+
+
+# Ablations of the paper's objective, by plain name; an Ablation looks up the same entry.
 ABLATIONS: dict[str, LossConfig] = {
-    "full": LossConfig(),
-    "no-triplet": LossConfig(triplet=False),
-    "recon-triplet": LossConfig(cross=False),
+    Ablation.FULL.value: LossConfig(),
+    Ablation.NO_TRIPLET.value: LossConfig(triplet=False),
+    Ablation.RECON_TRIPLET.value: LossConfig(cross=False),
 }
 
 

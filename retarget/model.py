@@ -18,6 +18,7 @@ import dataclasses
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 import torch
@@ -108,11 +109,20 @@ def _code_dim(widths: tuple[int, ...] | None, code: int | None) -> int:
     return code if code is not None else widths[-1]
 
 
-# The released variants: the paper's three-encoder model and the authors' two two-encoder models.
+class Variant(str, Enum):
+    """Names of the released variants (:data:`VARIANTS`): the paper's three-encoder model and the authors' two
+    two-encoder models."""
+
+    FULL = "full"
+    SKELETON = "skeleton"
+    VIEW = "view"
+
+
+# Keyed by the plain names (they are stored in checkpoints); a Variant looks up the same entry.
 VARIANTS: dict[str, NetworkConfig] = {
-    "full": NetworkConfig(),
-    "skeleton": NetworkConfig(view_channels=None, view_code=None, body_code=None),
-    "view": NetworkConfig(
+    Variant.FULL.value: NetworkConfig(),
+    Variant.SKELETON.value: NetworkConfig(view_channels=None, view_code=None, body_code=None),
+    Variant.VIEW.value: NetworkConfig(
         body_channels=None, body_code=None, view_channels=(POSE_CHANNELS, 64, 96, 128, 32), view_code=None
     ),
 }

@@ -13,7 +13,8 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, user_errors
+from clone.cli.choices import Align, CanvasMode, Method
+from clone.cli.common import DEVICE_HELP, console, user_errors
 
 DEFAULT_MODEL = Path("ref_model.pt")
 DEFAULT_SIZE = 128
@@ -44,14 +45,17 @@ def train_ref(
         "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes).")] = None,
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
     batch_size: Annotated[int, typer.Option("--batch-size", min=1, help="Samples per step.")] = 1,
-    canvas: Annotated[str, typer.Option(
-        "--canvas", help="crop (around the performer) | full (letterboxed frame).")] = "crop",
-    device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
+    canvas: Annotated[CanvasMode, typer.Option(
+        "--canvas", parser=CanvasMode, help="crop: around the performer; full: the letterboxed frame.")
+    ] = CanvasMode.CROP,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue training the model at --out from the training state stored in it.")] = False,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing model at --out.")] = False,
-    align: Annotated[str, typer.Option("--align", help="exact: frame and pose counts must agree | trim.")] = "exact",
+    align: Annotated[Align, typer.Option(
+        "--align", parser=Align, help="exact: frame and pose counts must agree; trim: use the common prefix.")
+    ] = Align.EXACT,
     weights: Annotated[Path | None, typer.Option(
         "--weights", help="Retargeting weights for the reference's codes (default: the shipped ones).")] = None,
 ) -> None:
@@ -76,14 +80,12 @@ def train_ref(
             default_depth(size)
         except ValueError as exc:
             raise InputError(f"--size: {exc}") from None
-    if canvas not in ("crop", "full"):
-        raise InputError(f"unknown --canvas {canvas!r}; valid: crop, full")
     dev = _device(device, threads)
     if resume:
         # The stored run's settings apply; a --size given must match it.
         config = TrainConfig(size=size, batch_size=batch_size) if size is not None else None
     else:
-        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas, batch_size=batch_size)
+        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size)
 
     with Progress(
         TextColumn("[bold]train-ref"), BarColumn(), TextColumn("{task.fields[info]}"), TimeElapsedColumn(),
@@ -104,7 +106,7 @@ def train_ref(
 
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
-            overwrite=overwrite, align=align, weights=weights, progress=update,
+            overwrite=overwrite, align=align.value, weights=weights, progress=update,
         )
     skipped = f", {result.skipped_frames} skipped (no usable pose)" if result.skipped_frames else ""
     codes = "with retargeting codes" if result.has_codes else "without retargeting codes (drive with --weights)"
@@ -120,13 +122,15 @@ def drive(
     out: Annotated[Path, typer.Option("--out", "-o", help="Video to write (.mp4, H.264).")],
     model: Annotated[Path, typer.Option(
         "--model", "-m", help="Reference model from `clone train-ref`.")] = DEFAULT_MODEL,
-    method: Annotated[str, typer.Option(
-        "--method", help="retarget (network) | global-scale (Everybody Dance Now) | none.")] = "retarget",
+    method: Annotated[Method, typer.Option(
+        "--method", parser=Method,
+        help="retarget: the network; global-scale: Everybody Dance Now's scaling; none: the driver's pixels.")
+    ] = Method.RETARGET,
     poses_out: Annotated[Path | None, typer.Option(
         "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv.")] = None,
     side_by_side: Annotated[bool, typer.Option(
         "--side-by-side", help="Frames show driver skeleton | driven skeleton | result.")] = False,
-    device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
     weights: Annotated[Path | None, typer.Option(
         "--weights", help="Retargeting weights (default: those the model's codes came from, else shipped).")] = None,
@@ -144,7 +148,7 @@ def drive(
                   console=console, transient=True) as bar:
         task = bar.add_task("drive", total=None)
         result = run_drive(
-            drive_poses, out, model_path=model, method=method, poses_out=poses_out, side_by_side=side_by_side,
+            drive_poses, out, model_path=model, method=method.value, poses_out=poses_out, side_by_side=side_by_side,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )

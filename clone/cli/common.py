@@ -5,13 +5,20 @@ from __future__ import annotations
 import functools
 import logging
 import sys
-from collections.abc import Callable
-from typing import TypeVar
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
 
 import typer
 from rich.console import Console
+from typer.core import TyperGroup
 
 from pose_io.errors import InputError
+
+try:  # typer >= 0.26 vendors click and does not re-export its usage errors (fastapi/typer discussion 1832)
+    from typer._click.exceptions import NoArgsIsHelpError, UsageError
+except ImportError:  # older typer runs on click itself
+    from click.exceptions import NoArgsIsHelpError, UsageError  # type: ignore[no-redef]
 
 F = TypeVar("F", bound=Callable[..., object])
 
@@ -35,6 +42,37 @@ def user_errors(func: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+class OneLineErrorGroup(TyperGroup):
+    """The root command group: a usage error anywhere below it ends as ONE line ``error: ...`` and exit code 2.
+
+    Usage errors are what typer finds before a command runs (a value that is not one of the choices, a number
+    out of range, an unknown option or command, a missing argument) and ``typer.BadParameter`` raised by a
+    command; typer would print them as a usage box. Sub-commands are parsed and run inside the root's
+    ``invoke``, so the root's ``make_context`` (its own options) and ``invoke`` (everything below) see them all.
+    A group called without arguments still prints its help.
+    """
+
+    def make_context(self, info_name: str | None, args: list[str], parent: Any = None, **extra: Any) -> Any:
+        with _one_line_usage_errors():
+            return super().make_context(info_name, args, parent=parent, **extra)
+
+    def invoke(self, ctx: Any) -> Any:
+        with _one_line_usage_errors():
+            return super().invoke(ctx)
+
+
+@contextmanager
+def _one_line_usage_errors() -> Iterator[None]:
+    try:
+        yield
+    except NoArgsIsHelpError:  # `clone`, `clone pose`: the help is the answer
+        raise
+    except UsageError as exc:
+        message = " ".join(exc.format_message().split())  # one line, whatever the message holds
+        typer.echo(f"error: {message}", err=True)
+        raise typer.Exit(code=2) from None
+
+
 def setup_logging(verbose: bool) -> None:
     logging.basicConfig(
         level=logging.DEBUG if verbose else logging.WARNING,
@@ -43,8 +81,8 @@ def setup_logging(verbose: bool) -> None:
     )
 
 
-def device_option() -> str:
-    return typer.Option("auto", "--device", help="auto | cpu | cuda | cuda:N")
+# --device is free text (cuda:N), not a choice: resolve_device_option checks it.
+DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 
 
 def resolve_device_option(spec: str, threads: int | None = None):  # -> torch.device

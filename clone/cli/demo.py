@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, user_errors
+from clone.cli.common import DEVICE_HELP, console, user_errors
 
 
 @user_errors
@@ -19,7 +19,7 @@ def demo_command(
     minutes: Annotated[
         float | None, typer.Option("--minutes", min=0.1, help="Training budget of the reference model.")
     ] = None,
-    device: Annotated[str, typer.Option("--device", help="auto | cpu | cuda | cuda:N")] = "auto",
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     weights: Annotated[
         Path | None, typer.Option("--weights", help="Retargeting weights (default: the shipped ones).")
     ] = None,

@@ -1,7 +1,11 @@
 """Entry point of the `clone` command.
 
 Each verb group lives in its own module and registers itself here. Nothing heavy is imported at
-module level, so `clone --help` stays fast.
+module level, so `clone --help` and shell completion (`clone --install-completion`) stay fast.
+
+Every user error ends as one line ``error: ...`` and exit code 2: the library's InputError through
+``user_errors`` on each command, typer's usage errors (a bad choice, a number out of range, an unknown option)
+through the root group, ``OneLineErrorGroup``.
 """
 
 from __future__ import annotations
@@ -10,7 +14,7 @@ import typer
 
 from clone import __version__
 from clone.cli import cloning
-from clone.cli.common import setup_logging
+from clone.cli.common import OneLineErrorGroup, setup_logging
 from clone.cli.demo import demo_command
 from clone.cli.pose import pose_app
 from clone.cli.report import report_command
@@ -21,8 +25,9 @@ from clone.cli.world import world_app
 app = typer.Typer(
     name="clone",
     help="2D performance cloning: move a driver's motion onto a reference person, then render them.",
+    cls=OneLineErrorGroup,
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.console import Console
 
+from clone.cli.choices import Layout, OutputFormat, PoseFormat
 from clone.cli.common import console, user_errors
 
 if TYPE_CHECKING:
@@ -24,19 +25,19 @@ pose_app = typer.Typer(
     no_args_is_help=True,
 )
 
-_FORMAT_HELP = "Input format: openpose | coco | alphapose | npz | npy | csv (default: from the path)."
+_FORMAT_HELP = "Input format (default: from the path)."
 _PERSON_HELP = "Follow person K of the first frame with people (default: the most prominent one)."
 _SIZE_HELP = "Image size WxH of the input (OpenPose/COCO/AlphaPose JSON store none; default: from the data)."
 _IN_FPS_HELP = "Frame rate of the input (default: the file's, else 30)."
 
 
-def _read(poses: Path, fmt: str | None, person: int | None, size: str | None,
+def _read(poses: Path, fmt: PoseFormat | None, person: int | None, size: str | None,
           in_fps: float | None, frames_size: tuple[int, int] | None = None) -> TrackSummary:
     """Read a track with the common reader options; ``frames_size`` stands in for a size the file lacks."""
     from pose_io.readers import parse_size, read_track_summary
 
     image_size = parse_size(size) if size else None
-    return read_track_summary(poses, fmt, person=person, fps=in_fps, image_size=image_size,
+    return read_track_summary(poses, fmt.value if fmt is not None else None, person=person, fps=in_fps, image_size=image_size,
                               fallback_size=frames_size)
 
 
@@ -59,7 +60,7 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None]]:
 @user_errors
 def info(
     poses: Annotated[Path, typer.Argument(help="Pose file or folder.")],
-    fmt: Annotated[str | None, typer.Option("--format", help=_FORMAT_HELP)] = None,
+    fmt: Annotated[PoseFormat | None, typer.Option("--format", parser=PoseFormat, help=_FORMAT_HELP)] = None,
     person: Annotated[int | None, typer.Option("--person", min=0, help=_PERSON_HELP)] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
     in_fps: Annotated[float | None, typer.Option("--in-fps", help=_IN_FPS_HELP)] = None,
@@ -112,7 +113,7 @@ def show(
     out: Annotated[Path, typer.Option("--out", help="Output .mp4.")],
     frames: Annotated[Path | None, typer.Option(
         "--frames", help="Video or image folder to draw on (its size is the output size).")] = None,
-    fmt: Annotated[str | None, typer.Option("--format", help=_FORMAT_HELP)] = None,
+    fmt: Annotated[PoseFormat | None, typer.Option("--format", parser=PoseFormat, help=_FORMAT_HELP)] = None,
     person: Annotated[int | None, typer.Option("--person", min=0, help=_PERSON_HELP)] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP + " With --frames: theirs.")] = None,
     in_fps: Annotated[float | None, typer.Option("--in-fps", help=_IN_FPS_HELP)] = None,
@@ -140,16 +141,16 @@ def show(
 def convert(
     src: Annotated[Path, typer.Argument(metavar="IN", help="Pose file or folder.")],
     dst: Annotated[Path, typer.Argument(metavar="OUT", help="Output: folder (OpenPose JSON), .npz or .csv.")],
-    to_layout: Annotated[str | None, typer.Option(
-        "--to-layout", help="Joint layout of the output: body25 | body15 | coco18 | coco17 | mediapipe33.")] = None,
+    to_layout: Annotated[Layout | None, typer.Option(
+        "--to-layout", parser=Layout, help="Joint layout of the output (default: the input's).")] = None,
     fill_gaps: Annotated[int | None, typer.Option(
         "--fill-gaps", min=0, help="Interpolate gaps of up to N frames per joint.")] = None,
     smooth: Annotated[float | None, typer.Option(
         "--smooth", min=0.0, help="Confidence-weighted temporal Gaussian, SIGMA in frames.")] = None,
     fps: Annotated[float | None, typer.Option("--fps", help="Resample to this frame rate.")] = None,
-    fmt: Annotated[str | None, typer.Option("--format", help=_FORMAT_HELP)] = None,
-    to: Annotated[str | None, typer.Option(
-        "--to", help="Output format: openpose | npz | csv (default: from OUT).")] = None,
+    fmt: Annotated[PoseFormat | None, typer.Option("--format", parser=PoseFormat, help=_FORMAT_HELP)] = None,
+    to: Annotated[OutputFormat | None, typer.Option(
+        "--to", parser=OutputFormat, help="Output format (default: from OUT).")] = None,
     person: Annotated[int | None, typer.Option("--person", min=0, help=_PERSON_HELP)] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
     in_fps: Annotated[float | None, typer.Option("--in-fps", help=_IN_FPS_HELP)] = None,
@@ -161,16 +162,9 @@ def convert(
     """
     from pose_io import clean
     from pose_io.atomic import check_new_output
-    from pose_io.errors import InputError
-    from pose_io.layouts import get_layout
     from pose_io.writers import write_track
 
     check_new_output(dst, overwrite)
-    if to_layout is not None:
-        try:
-            get_layout(to_layout)  # unknown names fail before any work
-        except ValueError as exc:
-            raise InputError(f"--to-layout: {exc}") from None
     track = _read(src, fmt, person, size, in_fps).track
     if fill_gaps is not None:
         track, report = clean.fill_gaps(track, fill_gaps)
@@ -180,8 +174,8 @@ def convert(
     if fps is not None:
         track = clean.resample(track, fps)
     if to_layout is not None:
-        track = track.to_layout(to_layout)
-    write_track(track, dst, fmt=to, overwrite=overwrite)
+        track = track.to_layout(to_layout.value)
+    write_track(track, dst, fmt=to.value if to is not None else None, overwrite=overwrite)
     typer.echo(f"wrote {dst} ({track.num_frames} frames, {track.layout}, {track.fps:g} fps, "
                f"{track.image_size[0]}x{track.image_size[1]})")
 

@@ -6,38 +6,40 @@ torch, OpenCV and matplotlib are imported inside the command so that `clone --he
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, device_option, user_errors
+from clone.cli.common import DEVICE_HELP, console, user_errors
 
 _HEADLINE = ("limb_error_pct", "foot_slide_pct", "jitter_pct", "pose_mse", "pck_0.1", "ssim", "psnr")
 
 
 @user_errors
 def report_command(
-    drive_poses: Path = typer.Argument(..., help="The driver's poses (any format `clone pose` reads)."),
-    out: Path = typer.Option(
-        ..., "--out", help="Report folder to write (report.html, video, plots, metrics.json)."
+    drive_poses: Annotated[Path, typer.Argument(help="The driver's poses (any format `clone pose` reads).")],
+    out: Annotated[
+        Path, typer.Option("--out", help="Report folder to write (report.html, video, plots, metrics.json).")
+    ],
+    model: Annotated[Path, typer.Option("--model", help="Reference model from `clone train-ref`.")] = Path(
+        "ref_model.pt"
     ),
-    model: Path = typer.Option(
-        Path("ref_model.pt"), "--model", help="Reference model from `clone train-ref`."
-    ),
-    gt_poses: Path | None = typer.Option(
-        None,
-        "--gt-poses",
-        help="Poses of the reference really performing the driver's motion, frame for frame.",
-    ),
-    gt_frames: Path | None = typer.Option(
-        None, "--gt-frames", help="Frames (video or image folder) of the same, at the reference's frame size."
-    ),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing report folder."),
-    device: str = device_option(),
-    weights: Path | None = typer.Option(
-        None,
-        "--weights",
-        help="Retargeting weights (default: the shipped ones, else those the model was made with).",
-    ),
+    gt_poses: Annotated[
+        Path | None,
+        typer.Option("--gt-poses", help="Poses of the reference really performing the driver's motion, frame for frame."),
+    ] = None,
+    gt_frames: Annotated[
+        Path | None,
+        typer.Option("--gt-frames", help="Frames (video or image folder) of the same, at the reference's frame size."),
+    ] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing report folder.")] = False,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    weights: Annotated[
+        Path | None,
+        typer.Option(
+            "--weights", help="Retargeting weights (default: the shipped ones, else those the model was made with)."
+        ),
+    ] = None,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn

@@ -10,7 +10,8 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, resolve_device_option, user_errors
+from clone.cli.choices import Ablation, Split, Variant
+from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -18,7 +19,6 @@ retarget_app = typer.Typer(
 )
 
 _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
-_DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 
 
 @retarget_app.command("apply")
@@ -38,7 +38,7 @@ def apply(
         typer.Option("--weights", help="clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped)."),
     ] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
-    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
@@ -81,10 +81,14 @@ def train(
         int | None, typer.Option("--epochs", min=1, help="Total epochs (default 300 without --minutes).")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run stored in --out.")] = False,
-    variant: Annotated[str, typer.Option("--variant", help="Network: full | skeleton | view.")] = "full",
+    variant: Annotated[
+        Variant, typer.Option("--variant", parser=Variant, help="Network: three encoders, or without view or body.")
+    ] = Variant.FULL,
     ablation: Annotated[
-        str, typer.Option("--ablation", help="Objective: full | no-triplet | recon-triplet.")
-    ] = "full",
+        Ablation,
+        typer.Option("--ablation", parser=Ablation, help="Objective: the paper's, without triplet loss, or without "
+                     "cross reconstruction."),
+    ] = Ablation.FULL,
     cache: Annotated[
         Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
     ] = None,
@@ -93,7 +97,7 @@ def train(
         int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")
     ] = None,
     workers: Annotated[int, typer.Option("--workers", min=0, help="Data-loader processes cutting world windows.")] = 0,
-    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     init: Annotated[
         Path | None,
         typer.Option("--init", help="Start from these weights: a clone2d checkpoint or the authors' pretrained_*.pth."),
@@ -121,10 +125,10 @@ def train(
 
     try:
         loss = dataclasses.replace(
-            ablation_config(ablation), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
+            ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
         )
-        config = TrainConfig(variant=variant, loss=loss, seed=seed, lr=lr)
+        config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = resolve_device_option(device, threads)
@@ -172,7 +176,7 @@ def evaluate(
     pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the cases.")] = 0,
-    split: Annotated[str, typer.Option("--split", help="World split: test | val.")] = "test",
+    split: Annotated[Split, typer.Option("--split", parser=Split, help="World split to measure on.")] = Split.TEST,
     world_seed: Annotated[
         int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
     ] = 0,
@@ -180,7 +184,7 @@ def evaluate(
         Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
     ] = None,
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")] = None,
-    device: Annotated[str, typer.Option("--device", help=_DEVICE_HELP)] = "auto",
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Retargeting error of our network vs baselines on unseen motions and characters, and code silhouettes."""
@@ -199,8 +203,6 @@ def evaluate(
         if not sep or not name.strip() or not path:
             raise InputError(f"--compare {item!r}: expected NAME=PATH")
         named[name.strip()] = Path(path)
-    if split not in ("test", "val"):
-        raise InputError(f"--split {split!r}: valid: test, val")
     real_tracks = None
     if real is not None:
         from retarget.train import read_real_tracks
@@ -212,7 +214,7 @@ def evaluate(
                   console=console, transient=True) as bar:  # fmt: skip
         task = bar.add_task("eval", total=None)
         doc, table = run_eval(
-            world.split(split), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
+            world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, seed=seed), fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed,
             progress=lambda done, total: bar.update(task, completed=done, total=total),

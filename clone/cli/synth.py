@@ -9,6 +9,7 @@ lists the named characters.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -24,16 +25,18 @@ synth_app = typer.Typer(
 @synth_app.command("render")
 @user_errors
 def render_command(
-    motion: Path = typer.Argument(..., help="Motion file: BVH (.bvh, .bvh.gz) or Acclaim AMC."),
-    out: Path = typer.Option(..., "--out", help="Output folder (frames/, poses/, poses.npz, meta.json)."),
-    character: str = typer.Option("average", "--character", help="Named character or an integer seed."),
-    yaw: float = typer.Option(0.0, "--yaw", help="View yaw in degrees (0 front, +90 the character's left)."),
-    pitch: float = typer.Option(0.0, "--pitch", help="Camera elevation in degrees (+ from above)."),
-    size: int = typer.Option(256, "--size", help="Square canvas side in pixels."),
-    start: int = typer.Option(0, "--start", help="First frame (after resampling to --fps)."),
-    frames: int | None = typer.Option(None, "--frames", help="Number of frames (default: to the end)."),
-    fps: float = typer.Option(30.0, "--fps", help="Frame rate the motion is resampled to."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --out folder."),
+    motion: Annotated[Path, typer.Argument(help="Motion file: BVH (.bvh, .bvh.gz) or Acclaim AMC.")],
+    out: Annotated[Path, typer.Option("--out", help="Output folder (frames/, poses/, poses.npz, meta.json).")],
+    character: Annotated[str, typer.Option("--character", help="Named character or an integer seed.")] = "average",
+    yaw: Annotated[
+        float, typer.Option("--yaw", help="View yaw in degrees (0 front, +90 the character's left).")
+    ] = 0.0,
+    pitch: Annotated[float, typer.Option("--pitch", help="Camera elevation in degrees (+ from above).")] = 0.0,
+    size: Annotated[int, typer.Option("--size", help="Square canvas side in pixels.")] = 256,
+    start: Annotated[int, typer.Option("--start", help="First frame (after resampling to --fps).")] = 0,
+    frames: Annotated[int | None, typer.Option("--frames", help="Number of frames (default: to the end).")] = None,
+    fps: Annotated[float, typer.Option("--fps", help="Frame rate the motion is resampled to.")] = 30.0,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out folder.")] = False,
 ) -> None:
     """Render MOTION performed by a character, framed by the world's framing rule."""
     from rich.progress import Progress

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -15,16 +16,24 @@ world_app = typer.Typer(no_args_is_help=True, help="Build and inspect the motion
 @world_app.command("build")
 @user_errors
 def build(
-    mocap: Path = typer.Option(..., "--mocap", help="Folder of .bvh / .bvh.gz / .amc files (searched recursively)."),
-    cache: Path = typer.Option(None, "--cache", help="Cache folder [default: ~/.cache/clone2d/world]."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the motion split and the characters."),
-    fps: float = typer.Option(30.0, "--fps", help="Frame rate every clip is resampled to."),
-    train_characters: int = typer.Option(64, "--train-characters", min=1, help="Sampled training characters."),
-    val_characters: int = typer.Option(8, "--val-characters", min=1, help="Sampled validation characters."),
-    test_characters: int = typer.Option(8, "--test-characters", min=1, help="Sampled test characters (+ named)."),
-    window: int = typer.Option(64, "--window", min=2, help="Window length in frames."),
-    stride: int = typer.Option(32, "--stride", min=1, help="Step between windows."),
-    rebuild: bool = typer.Option(False, "--rebuild", help="Build again even if the cache has this world."),
+    mocap: Annotated[
+        Path, typer.Option("--mocap", help="Folder of .bvh / .bvh.gz / .amc files (searched recursively).")
+    ],
+    cache: Annotated[
+        Path | None, typer.Option("--cache", help="Cache folder (default: ~/.cache/clone2d/world).")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the motion split and the characters.")] = 0,
+    fps: Annotated[float, typer.Option("--fps", help="Frame rate every clip is resampled to.")] = 30.0,
+    train_characters: Annotated[
+        int, typer.Option("--train-characters", min=1, help="Sampled training characters.")
+    ] = 64,
+    val_characters: Annotated[int, typer.Option("--val-characters", min=1, help="Sampled validation characters.")] = 8,
+    test_characters: Annotated[
+        int, typer.Option("--test-characters", min=1, help="Sampled test characters (+ named).")
+    ] = 8,
+    window: Annotated[int, typer.Option("--window", min=2, help="Window length in frames.")] = 64,
+    stride: Annotated[int, typer.Option("--stride", min=1, help="Step between windows.")] = 32,
+    rebuild: Annotated[bool, typer.Option("--rebuild", help="Build again even if the cache has this world.")] = False,
 ) -> None:
     """Build (or open from the cache) the motion world and print its summary."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn

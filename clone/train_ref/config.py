@@ -3,9 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from enum import Enum
 from typing import Any
 
 from clone.networks import DiscriminatorConfig, GeneratorConfig, default_depth
+
+
+class PrevSource(str, Enum):
+    """What G is given as the previous frame during training (see ``Trainer.previous_input``)."""
+
+    GENERATED = "generated"  # G's own frame for t-1, as when driving (Everybody Dance Now)
+    REAL = "real"  # the real previous frame: teacher forcing
 
 
 @dataclass(frozen=True)
@@ -54,7 +62,7 @@ class TrainConfig:
         beta1: Adam beta1 (pix2pix uses 0.5).
         prev_dropout: probability that the previous-frame input is zeros.
         prev_source: ``real`` previous frames or G's own (``generated``), see
-            :meth:`clone.train_ref.Trainer.previous_input`.
+            :meth:`clone.train_ref.Trainer.previous_input`; the plain name is accepted too.
         temporal: give G the previous frame at all.
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
         steps: default number of steps when neither steps nor minutes are given.
@@ -80,7 +88,7 @@ class TrainConfig:
     beta1: float = 0.5
     prev_dropout: float = 0.3
     # Teacher forcing with real previous frames drifted by 3 dB PSNR when driving on its own output.
-    prev_source: str = "generated"
+    prev_source: PrevSource = PrevSource.GENERATED
     temporal: bool = True
     min_visible_joints: int = 10
     steps: int = 2000
@@ -89,6 +97,15 @@ class TrainConfig:
     seed: int = 0
     augment: AugmentConfig = field(default_factory=AugmentConfig)
     loss: LossConfig = field(default_factory=LossConfig)
+
+    def __post_init__(self) -> None:
+        # A misspelt name must not fall through to teacher forcing (the trainer only tests for "generated").
+        try:
+            source = PrevSource(self.prev_source)
+        except ValueError:
+            valid = ", ".join(s.value for s in PrevSource)
+            raise ValueError(f"unknown prev_source {self.prev_source!r}; valid: {valid}") from None
+        object.__setattr__(self, "prev_source", source)
 
     def generator_config(self) -> GeneratorConfig:
         """The generator this run trains."""
@@ -103,8 +120,10 @@ class TrainConfig:
         return DiscriminatorConfig(base_channels=self.disc_channels, num_layers=self.disc_layers)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (stored in the model file)."""
-        return asdict(self)
+        """Plain nested dict (stored in the model file, so the enum is stored as its name)."""
+        data = asdict(self)
+        data["prev_source"] = self.prev_source.value
+        return data
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
@@ -112,6 +131,7 @@ class TrainConfig:
 
         Raises:
             TypeError, KeyError: ``data`` has unknown or missing entries.
+            ValueError: ``data`` names an unknown ``prev_source``.
         """
         data = dict(data)
         augment = AugmentConfig(**data.pop("augment"))

@@ -28,10 +28,13 @@ def test_info_shows_counts_and_missing_table(tmp_path, walking_track):
     assert "2" in row and "5.0%" in row
 
 
-def test_info_on_shared_example_with_size(shared_dir):
-    result = invoke("pose", "info", shared_dir / "openpose_examples" / "small_man", "--size", "720x720")
+def test_info_on_a_plain_openpose_folder_with_size(tmp_path, walking_track):
+    """OpenPose's own output (no clone2d sidecar): fps by default, the image size as given."""
+    folder = write_track(walking_track.replace(fps=25.0), tmp_path / "openpose")
+    (folder / "clone2d_track.json").unlink()
+    result = invoke("pose", "info", folder, "--size", "720x720")
     assert result.exit_code == 0, result.output
-    assert "121 (4.03 s)" in result.output and "720x720 (given)" in result.output
+    assert "40 (1.33 s)" in result.output and "720x720 (given)" in result.output
     assert "30 (default" in result.output
 
 
@@ -56,7 +59,7 @@ def test_info_people_per_frame(tmp_path):
         (["pose", "info", "{tmp}/empty"], "empty"),
         (["pose", "info", "{tmp}/empty", "--size", "12"], "WIDTHxHEIGHT"),
         (["pose", "convert", "{tmp}/empty", "{tmp}/out.npz"], "empty"),
-        (["pose", "convert", "{tmp}/good", "{tmp}/out.npz", "--to-layout", "smpl"], "unknown joint layout"),
+        (["pose", "convert", "{tmp}/good", "{tmp}/out.npz", "--to-layout", "smpl"], "'smpl'; valid: body25"),
         (["pose", "show", "{tmp}/good", "--out", "{tmp}/out.mp4", "--frames", "{tmp}/bad.mp4"], "cannot read as a video"),
         (["pose", "extract", "{tmp}/bad.mp4", "--out", "{tmp}/outdir"], "bad.mp4"),
     ],

@@ -1,4 +1,7 @@
-"""`clone retarget apply` and `clone retarget train` through typer's CliRunner."""
+"""`clone retarget apply` and `clone retarget train` through typer's CliRunner.
+
+The inputs are OpenPose folders of people the tests build; apply runs with the weights shipped in the package.
+"""
 
 import shutil
 
@@ -7,15 +10,21 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from pose_io.readers import read_track
+from pose_io.writers import write_track
 from retarget import api
+from tests.figures import tall_and_small
+
+FRAMES = 75
 
 
 @pytest.fixture(scope="module")
-def inputs(shared_dir):
+def inputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("people")
+    people = tall_and_small(FRAMES)
     return {
-        "weights": shared_dir / "official_2dmr" / "weights" / "pretrained_full.pth",
-        "tall": shared_dir / "openpose_examples" / "tall_man",
-        "small": shared_dir / "openpose_examples" / "small_man",
+        "weights": api.PACKAGED_WEIGHTS,
+        "tall": write_track(people["tall"], folder / "tall_man"),
+        "small": write_track(people["small"], folder / "small_man"),
     }
 
 
@@ -27,8 +36,18 @@ def test_apply_writes_an_openpose_folder_and_a_preview(inputs, tmp_path):
     ])
     assert result.exit_code == 0, result.output
     track = read_track(out)
-    assert len(track) == 135 and track.layout == "body15" and track.image_size == (720, 720)
+    assert len(track) == FRAMES and track.layout == "body15" and track.image_size == (720, 720)
     assert preview.stat().st_size > 0
+
+
+def test_apply_uses_the_packaged_weights_by_default(inputs, tmp_path):
+    out = tmp_path / "moved.npz"
+    result = CliRunner().invoke(app, ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]),
+                                      "--out", str(out), "--device", "cpu"])
+    assert result.exit_code == 0, result.output
+    assert str(out) in result.output.replace("\n", "")
+    track = read_track(out)
+    assert len(track) == FRAMES and track.layout == "body15" and not track.missing.any()
 
 
 def test_apply_errors_are_one_line(inputs, tmp_path, monkeypatch):
@@ -43,11 +62,12 @@ def test_apply_errors_are_one_line(inputs, tmp_path, monkeypatch):
     assert result.exit_code == 2 and "no trained retargeting weights are shipped yet" in result.output
     short = tmp_path / "short"
     short.mkdir()
-    for f in sorted(inputs["small"].glob("*.json"))[:10]:
+    for f in sorted(inputs["small"].glob("*_keypoints.json"))[:10]:  # not the clone2d_track.json sidecar
         shutil.copy(f, short)
     result = runner.invoke(app, ["retarget", "apply", str(short), "--skeleton", str(inputs["small"]),
                                  "--out", str(tmp_path / "o"), "--weights", str(inputs["weights"])])
-    assert result.exit_code == 2 and "10 frames; the retargeting network needs at least 16" in result.output
+    need = api.load_retargeter(inputs["weights"]).min_frames
+    assert result.exit_code == 2 and f"10 frames; the retargeting network needs at least {need}" in result.output
     assert str(short) in result.output
     assert not (tmp_path / "o").exists()
 
@@ -60,7 +80,7 @@ def test_train_errors_are_one_line(tmp_path):
     assert result.exit_code == 2 and "pass --resume" in result.output
     result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path), "--out", str(tmp_path / "n.pt"),
                                  "--variant", "huge"])
-    assert result.exit_code == 2 and "unknown network variant 'huge'" in result.output
+    assert result.exit_code == 2 and "'huge'; valid: full, skeleton, view" in result.output  # typer checks the choice
     result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path / "none"),
                                  "--out", str(tmp_path / "n.pt"), "--device", "cpu"])
     assert result.exit_code == 2 and "no such folder" in result.output
