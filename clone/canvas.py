@@ -16,22 +16,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from enum import Enum
 
 import cv2
 import numpy as np
 
+from clone.choices import CanvasMode
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
-
-
-class CanvasMode(str, Enum):
-    """Where the canvas sits: a square ``crop`` around the performer or the ``full`` frame letterboxed."""
-
-    CROP = "crop"
-    FULL = "full"
-
 
 # Plain names: a Canvas keeps (and the model file stores) the name, never the enum member.
 CANVAS_MODES = tuple(m.value for m in CanvasMode)

@@ -18,7 +18,6 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +25,7 @@ import numpy as np
 import torch
 
 from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
+from clone.choices import Method
 from clone.networks import generator_input
 from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
 from clone.tensors import to_images, to_tensor
@@ -36,13 +36,6 @@ from retarget.global_scale import apply_global_scale, scale_stats
 
 log = logging.getLogger(__name__)
 
-
-class Method(str, Enum):
-    """How the driver's poses are moved onto the reference (``--method``; see the module docstring)."""
-
-    RETARGET = "retarget"
-    GLOBAL_SCALE = "global-scale"
-    NONE = "none"
 
 
 METHODS = tuple(m.value for m in Method)

@@ -12,7 +12,6 @@ error lets drift.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
 import torch
@@ -20,6 +19,7 @@ import torch.nn.functional as F
 
 from pose_io.measures import ANKLES
 from retarget.augment import COMBOS, MOTION, SKELETON, VIEW, combo_index
+from retarget.choices import Ablation
 from retarget.model import RetargetNet
 from retarget.preprocess import LAYOUT, NormStats, channels_to_joints, pose_channels, velocity_channels
 
@@ -48,13 +48,6 @@ class LossConfig:
     trajectory_weight: float = 0.0
     spread_weight: float = 0.0
 
-
-class Ablation(str, Enum):
-    """Names of the ablations of the paper's objective (:data:`ABLATIONS`)."""
-
-    FULL = "full"
-    NO_TRIPLET = "no-triplet"
-    RECON_TRIPLET = "recon-triplet"
 
 
 # Ablations of the paper's objective, by plain name; an Ablation looks up the same entry.

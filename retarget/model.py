@@ -18,13 +18,13 @@ import dataclasses
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
-from enum import Enum
 from typing import Any
 
 import torch
 import torch.nn.functional as F
 from torch import nn
 
+from retarget.choices import Variant
 from retarget.preprocess import NUM_CHANNELS, POSE_CHANNELS, pose_channels
 
 
@@ -108,14 +108,6 @@ def _code_dim(widths: tuple[int, ...] | None, code: int | None) -> int:
         return 0
     return code if code is not None else widths[-1]
 
-
-class Variant(str, Enum):
-    """Names of the released variants (:data:`VARIANTS`): the paper's three-encoder model and the authors' two
-    two-encoder models."""
-
-    FULL = "full"
-    SKELETON = "skeleton"
-    VIEW = "view"
 
 
 # Keyed by the plain names (they are stored in checkpoints); a Variant looks up the same entry.

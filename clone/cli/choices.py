@@ -7,13 +7,9 @@ parser=Method)]``): typer still lists and completes the values, and a bad one go
 not one of 'retarget', ...``), so that the whole line is
 ``error: Invalid value for '--method': 'magic'; valid: retarget, global-scale, none``.
 
-Where the library keeps its list in a light module (pose_io's readers, writers and joint layouts), the enum is
-built from that list. Where the library's enum lives in a module that imports torch or OpenCV
-(:class:`clone.drive.Method`, :class:`retarget.model.Variant`, :class:`retarget.losses.Ablation`,
-:class:`clone.canvas.CanvasMode`, ``clone.train_ref.data.ALIGN_MODES``), it is written out again here: typer reads
-these types whenever it builds the app, for ``clone --help`` and for every shell-completion request too, and
-importing torch there would add about 2 s to each (see bench/startup.py). tests/clone/cli/test_choices.py checks
-that every copy equals the library's enum.
+Every enum is built from the library's own list, kept in light modules (pose_io's readers, writers and joint
+layouts; :mod:`clone.choices`; :mod:`retarget.choices`) because typer reads these types whenever it builds the
+app, for ``clone --help`` and every shell-completion request, where importing torch would add about 2 s.
 """
 
 from __future__ import annotations
@@ -23,9 +19,11 @@ from typing import NoReturn
 
 import typer
 
+from clone import choices
 from pose_io.layouts import LAYOUTS
 from pose_io.readers import READERS
 from pose_io.writers import WRITERS
+from retarget import choices as retarget_choices
 
 
 class Choice(str, Enum):
@@ -36,50 +34,17 @@ class Choice(str, Enum):
         raise typer.BadParameter(f"{value!r}; valid: {', '.join(member.value for member in cls)}")
 
 
-class Method(Choice):
-    """``clone drive --method``: a copy of :class:`clone.drive.Method`."""
-
-    RETARGET = "retarget"
-    GLOBAL_SCALE = "global-scale"
-    NONE = "none"
+def _from(library: type[Enum]) -> type[Choice]:
+    """The command-line twin of a library enum: same names and values, and one-line errors."""
+    return Choice(library.__name__, [(member.name, member.value) for member in library])  # type: ignore[return-value]
 
 
-class Variant(Choice):
-    """``clone retarget train --variant``: a copy of :class:`retarget.model.Variant`."""
-
-    FULL = "full"
-    SKELETON = "skeleton"
-    VIEW = "view"
-
-
-class Ablation(Choice):
-    """``clone retarget train --ablation``: a copy of :class:`retarget.losses.Ablation`."""
-
-    FULL = "full"
-    NO_TRIPLET = "no-triplet"
-    RECON_TRIPLET = "recon-triplet"
-
-
-class CanvasMode(Choice):
-    """``clone train-ref --canvas``: a copy of :class:`clone.canvas.CanvasMode`."""
-
-    CROP = "crop"
-    FULL = "full"
-
-
-class Align(Choice):
-    """``clone train-ref --align``: a copy of ``clone.train_ref.data.ALIGN_MODES``."""
-
-    EXACT = "exact"
-    TRIM = "trim"
-
-
-class Split(Choice):
-    """``clone retarget eval --split``: the held-out splits of the motion world (``retarget.world.SPLITS``)."""
-
-    TEST = "test"
-    VAL = "val"
-
+Method = _from(choices.Method)
+CanvasMode = _from(choices.CanvasMode)
+Align = _from(choices.Align)
+Variant = _from(retarget_choices.Variant)
+Ablation = _from(retarget_choices.Ablation)
+Split = _from(retarget_choices.Split)
 
 # Built from pose_io's registries, which `clone --help` imports anyway (pose_io is numpy only).
 PoseFormat = Choice("PoseFormat", [(name, name) for name in READERS])

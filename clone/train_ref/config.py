@@ -3,17 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from enum import Enum
 from typing import Any
 
+from clone.choices import PrevSource
 from clone.networks import DiscriminatorConfig, GeneratorConfig, default_depth
-
-
-class PrevSource(str, Enum):
-    """What G is given as the previous frame during training (see ``Trainer.previous_input``)."""
-
-    GENERATED = "generated"  # G's own frame for t-1, as when driving (Everybody Dance Now)
-    REAL = "real"  # the real previous frame: teacher forcing
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ import torch
 from torch import Tensor
 
 from clone.canvas import render_pose_map
+from clone.choices import Align
 from clone.reference_model import LAYOUT, file_sha256
 from clone.tensors import to_tensor
 from pose_io.errors import InputError
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-ALIGN_MODES = ("exact", "trim")
+ALIGN_MODES = tuple(a.value for a in Align)
 # Frames are kept in memory up to this many bytes, beyond that in a temporary memory-mapped file.
 _IN_MEMORY_BYTES = 1 << 30
 
