@@ -14,7 +14,7 @@ compared with what it should keep:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from itertools import permutations
 
 import numpy as np
@@ -22,9 +22,8 @@ import numpy as np
 from pose_io.clean import smooth_joints
 from pose_io.measures import amplitude_ratio, motion_spread, reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
+from retarget.evaluate.config import Method
 from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15
-
-Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
 
 
 def wrist_rise(joints: np.ndarray, height: float) -> float:
@@ -42,18 +41,30 @@ def wrist_rise(joints: np.ndarray, height: float) -> float:
 def pair_scores(
     motion: PoseTrack, reference: PoseTrack, output: PoseTrack, sigma: float = 2.0
 ) -> dict[str, float | dict]:
-    """What retargeting ``motion`` onto ``reference`` kept, measured on ``output`` (see the module docstring)."""
+    """What retargeting ``motion`` onto ``reference`` kept, measured on ``output`` (see the module docstring).
+
+    Args:
+        motion: the driver, any layout that gives body15.
+        reference: the person the motion was moved onto.
+        output: the retargeted track, [T, 15, 2] body15.
+        sigma: temporal smoothing (frames) applied to the driver before it is measured.
+
+    Returns:
+        ``amplitude`` (output's range of motion over the driver's), ``amplitude_per_joint`` (the same per
+        joint, MidHip left out), ``wrist_rise_pct`` and ``driver_wrist_rise_pct`` (:func:`wrist_rise`),
+        ``limb_error_pct`` (mean absolute limb-length difference from the reference, in % of its height).
+    """
     drv = smooth_joints(filled_body15(motion, "motion track"), sigma)
     ref = filled_body15(reference, "reference track")
     out = np.asarray(output.joints, dtype=np.float64)
     h_drv, h_ref, h_out = (skeleton_height(j, LAYOUT) for j in (drv, ref, out))
-    per_joint = motion_spread(out, h_out, ROOT_INDEX) / motion_spread(drv, h_drv, ROOT_INDEX)
+    # The root's spread is 0 once it is subtracted: leave it out rather than divide 0 by 0.
+    moving = [j for j in range(len(LAYOUT.joints)) if j != ROOT_INDEX]
+    per_joint = motion_spread(out, h_out, ROOT_INDEX)[moving] / motion_spread(drv, h_drv, ROOT_INDEX)[moving]
     limbs = np.abs(reference_limb_lengths(out, LAYOUT) - reference_limb_lengths(ref, LAYOUT)) / h_ref * 100
     return {
         "amplitude": amplitude_ratio(out, h_out, drv, h_drv, ROOT_INDEX),
-        "amplitude_per_joint": {
-            name: round(float(r), 4) for name, r in zip(LAYOUT.joints, per_joint) if name != LAYOUT.joints[ROOT_INDEX]
-        },
+        "amplitude_per_joint": {LAYOUT.joints[j]: round(float(r), 4) for j, r in zip(moving, per_joint)},
         "wrist_rise_pct": wrist_rise(out, h_out),
         "driver_wrist_rise_pct": wrist_rise(drv, h_drv),
         "limb_error_pct": float(np.nanmean(limbs)),

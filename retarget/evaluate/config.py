@@ -1,0 +1,43 @@
+"""What an evaluation measures (:class:`EvalConfig`) and the shape of what it runs (:data:`Method`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pose_io.track import PoseTrack
+from retarget.world.camera import MAX_PITCH
+
+Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
+Progress = Callable[[int, int], None]  # progress(done, total)
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """What is evaluated.
+
+    Attributes:
+        pairs: cases per source (the split, and the extra clips if any).
+        length: frames of an evaluated case.
+        reference_length: frames of a reference window.
+        seed: seeds every choice of cases and of the silhouette windows.
+        max_pitch: cameras get a pitch drawn uniformly in +-max_pitch degrees.
+        code_samples: motions, characters and views each in the silhouette grid (``code_samples^3`` windows).
+    """
+
+    pairs: int = 500
+    length: int = 64
+    reference_length: int = 64
+    seed: int = 0
+    max_pitch: float = MAX_PITCH
+    code_samples: int = 6
+
+    def __post_init__(self) -> None:
+        if self.pairs < 1 or self.length < 8 or self.reference_length < 8:
+            raise ValueError("pairs must be >= 1 and length, reference_length >= 8")
+        if self.code_samples < 2 or self.max_pitch < 0:
+            raise ValueError("code_samples must be >= 2 and max_pitch >= 0")
+
+
+# The paper's protocol; a shared default is safe as the config is frozen.
+DEFAULT_CONFIG = EvalConfig()

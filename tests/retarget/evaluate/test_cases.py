@@ -1,0 +1,38 @@
+"""Case sampling and extra mocap clips."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pose_io.errors import InputError
+from retarget.evaluate import ClipMotions, EvalConfig, sample_cases
+from retarget.world import MotionWorld, load_motion
+from tests.retarget.evaluate.helpers import TINY
+
+
+def test_cases_are_seeded_and_references_share_no_frame(cache: Path, tiny_mocap: Path) -> None:
+    split = MotionWorld.build(tiny_mocap, cache).split("test")  # one clip of 138 frames: windows overlap
+    config = EvalConfig(pairs=40)
+    cases = sample_cases(split, split, config, np.random.default_rng(3))
+    assert cases == sample_cases(split, split, config, np.random.default_rng(3))
+    for case in cases:
+        assert case.source_character != case.character
+        drv, ref = split.window_labels[case.motion], split.window_labels[case.reference]
+        assert drv.start + 64 <= ref.start or ref.start + 64 <= drv.start
+        assert abs(case.pitch) <= config.max_pitch
+    with pytest.raises(InputError, match="shares none"):
+        sample_cases(split, split, EvalConfig(pairs=1, length=128), np.random.default_rng(0))
+
+
+def test_extra_clips_replay_like_the_world(cache: Path, tiny_mocap: Path) -> None:
+    split = MotionWorld.build(tiny_mocap, cache).split("test")
+    motion = load_motion(tiny_mocap / Path(TINY[1]).name)  # the test split's own clip
+    clips = ClipMotions([motion], split.characters, 64, 32)
+    assert [lab.start for lab in clips.window_labels] == [lab.start for lab in split.window_labels]
+    for m in range(clips.num_motions):
+        assert np.allclose(clips.window3d(m, 2), split.window3d(m, 2), atol=1e-5)
+    with pytest.raises(InputError, match="shorter"):
+        ClipMotions([motion], split.characters, 512, 32)

@@ -1,0 +1,63 @@
+"""`clone retarget eval` end to end: the folder it writes and its one-line input errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from clone.cli.main import app
+from retarget.evaluate import BASELINES, OFFICIAL_FILES, REFERENCES_3D
+from tests.retarget.evaluate.helpers import TINY
+
+
+def test_cli_writes_the_table_plots_and_json(
+    shared_dir: Path, tiny_mocap: Path, cache: Path, tiny_weights: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "eval"
+    args = ["retarget", "eval", "--mocap", str(tiny_mocap), "--cache", str(cache), "--weights", str(tiny_weights),
+            "--compare", f"no triplet={tiny_weights}", "--bvh", str(tiny_mocap / Path(TINY[0]).name),
+            "--official", str(shared_dir / "official_2dmr" / "weights"),
+            "--pairs", "3", "--split", "val", "--threads", "1", "--device", "cpu", "--out", str(out)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    doc = json.loads((out / "eval.json").read_text())
+    rows = {"ours", "no triplet", *OFFICIAL_FILES, *BASELINES, *REFERENCES_3D}
+    assert list(doc["results"]) == ["val split", "extra mocap (1 clip)"]
+    for source in doc["results"].values():
+        assert set(source) == rows
+        for row in source.values():
+            assert set(row) == {"pose", "with_root", "placed"}
+            assert all(np.isfinite(v) for v in row["pose"].values())
+            assert 0.0 <= row["placed"]["pck_0.1"] <= 1.0
+    assert set(doc["silhouettes"]["ours"]) == {"motion", "body", "view"}
+    assert all(-1.0 <= v <= 1.0 for v in doc["silhouettes"]["no triplet"].values())
+    assert set(doc["silhouettes"]["authors' view-only"]) == {"motion", "view"}
+    assert sorted(p.name for p in out.glob("*.png")) == [
+        "codes_authors_full.png", "codes_authors_skeleton_only.png", "codes_authors_view_only.png",
+        "codes_no_triplet.png", "codes_ours.png",
+    ]
+    table = (out / "eval.md").read_text()
+    assert "| ours |" in table and "| 3D rotation copy |" in table and "h² × 10⁻³" in table
+    assert "| ours |" in result.output  # printed too
+    again = CliRunner().invoke(app, args)
+    assert again.exit_code == 2 and "already exists" in again.output
+
+
+def test_cli_input_errors_are_one_line(tiny_mocap: Path, cache: Path, tiny_weights: Path, tmp_path: Path) -> None:
+    base = ["retarget", "eval", "--mocap", str(tiny_mocap), "--cache", str(cache), "--weights", str(tiny_weights),
+            "--pairs", "2", "--split", "val"]  # fmt: skip
+    cases = {
+        "expected NAME=PATH": ["--compare", "nopath"],
+        "none of pretrained_full.pth": ["--official", str(tmp_path)],
+        "that row name is taken": ["--compare", f"ours={tiny_weights}"],
+        "valid: test, val": ["--split", "train"],
+    }
+    for k, (message, extra) in enumerate(cases.items()):
+        out = tmp_path / f"out{k}"
+        result = CliRunner().invoke(app, [*base, *extra, "--out", str(out)])
+        assert result.exit_code == 2, result.output
+        assert message in result.output and "Traceback" not in result.output
+        assert not out.exists()
