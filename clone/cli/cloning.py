@@ -14,24 +14,10 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Align, CanvasMode, Method
-from clone.cli.common import DEVICE_HELP, console, user_errors
+from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
 
 DEFAULT_MODEL = Path("ref_model.pt")
 DEFAULT_SIZE = 128
-
-
-def _device(spec: str, threads: int | None):  # -> torch.device
-    """Resolve --device (InputError on a bad one); on CPU set the torch thread count."""
-    from pose_io.errors import InputError
-    from retarget.runtime import configure_threads, resolve_device
-
-    try:
-        device = resolve_device(spec)
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
-    if device.type == "cpu":
-        configure_threads(threads)
-    return device
 
 
 @user_errors
@@ -80,7 +66,7 @@ def train_ref(
             default_depth(size)
         except ValueError as exc:
             raise InputError(f"--size: {exc}") from None
-    dev = _device(device, threads)
+    dev = resolve_device_option(device, threads)
     if resume:
         # The stored run's settings apply; a --size given must match it.
         config = TrainConfig(size=size, batch_size=batch_size) if size is not None else None
@@ -143,7 +129,7 @@ def drive(
 
     from clone.drive import drive as run_drive
 
-    dev = _device(device, threads)
+    dev = resolve_device_option(device, threads)
     with Progress(TextColumn("[bold]drive"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                   console=console, transient=True) as bar:
         task = bar.add_task("drive", total=None)
