@@ -15,10 +15,24 @@ from pathlib import Path
 from pose_io.errors import InputError
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+def _umask(probe_dir: Path) -> int:
+    """The process's file-creation mask, read without changing it (``os.umask`` can only be read by setting).
+
+    Linux reports it in /proc; elsewhere a probe file created with mode 0666 in ``probe_dir`` shows it.
+    """
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    probe = probe_dir / f".umask-probe-{os.getpid()}-{id(probe_dir)}"
+    fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666)
+    try:
+        return 0o666 & ~os.fstat(fd).st_mode & 0o777
+    finally:
+        os.close(fd)
+        probe.unlink()
 
 
 def check_new_output(path: Path, overwrite: bool = False) -> None:
@@ -44,7 +58,7 @@ def atomic_file(path: str | os.PathLike, overwrite: bool = True) -> Iterator[Pat
     try:
         yield tmp_path
         # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-        os.chmod(tmp_path, 0o666 & ~_umask())
+        os.chmod(tmp_path, 0o666 & ~_umask(tmp_path.parent))
         os.replace(tmp_path, path)
     finally:
         if tmp_path.exists():
@@ -63,7 +77,7 @@ def atomic_dir(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pat
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
     try:
         yield tmp
-        os.chmod(tmp, 0o777 & ~_umask())
+        os.chmod(tmp, 0o777 & ~_umask(tmp.parent))
         if path.exists():
             old = path.with_name(f".{path.name}.old-{os.getpid()}")
             os.replace(path, old)
