@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pose_io import BODY15, BODY25, COCO18, MEDIAPIPE33, InputError, PoseTrack, get_layout
+from pose_io import BODY15, BODY25, COCO18, MEDIAPIPE33, InputError, PoseTrack
 
 
 def test_missing_is_nan_and_zero_confidence(walking_track):
@@ -33,23 +33,6 @@ def test_arrays_are_read_only(walking_track):
 def test_constructor_rejects_bad_arrays(joints, conf, message):
     with pytest.raises(InputError, match=message):
         PoseTrack(joints, conf, 30.0, (64, 64), "body25")
-
-
-def test_unknown_layout_lists_valid_ones():
-    with pytest.raises(ValueError, match="body25"):
-        get_layout("smpl")
-
-
-def test_body15_is_the_first_15_body25_joints():
-    assert BODY15.joints == BODY25.joints[:15]
-    assert BODY15.index("mid_hip") == 8
-
-
-def test_mirror_swaps_sides_and_is_an_involution():
-    for layout in (BODY25, COCO18, MEDIAPIPE33):
-        perm = layout.mirror
-        assert np.array_equal(perm[perm], np.arange(len(layout)))
-    assert BODY25.joints[BODY25.mirror[BODY25.index("l_wrist")]] == "r_wrist"
 
 
 def test_coco18_to_body15_makes_mid_hip(walking_track):

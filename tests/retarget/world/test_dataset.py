@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import itertools
 import pickle
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +15,7 @@ from pose_io.layouts import BODY15
 from retarget.world import NAMED_CHARACTERS, WORLD_JOINTS, MotionWorld, facing_angle, project
 from retarget.world import dataset as dataset_module
 from retarget.world.dataset import assign_splits, motion_group, window_starts
+from tests.retarget.world.humanoid import write_clip
 
 J = WORLD_JOINTS.index
 TINY_FILES = (
@@ -28,12 +28,13 @@ SMALL = {"n_train_characters": 3, "n_val_characters": 2, "n_test_characters": 2}
 
 
 @pytest.fixture(scope="module")
-def tiny_mocap(shared_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+def tiny_mocap(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Four clips: two motions of dataset-1 and two takes of one motion of dataset-2."""
     root = tmp_path_factory.mktemp("mocap")
     for rel in TINY_FILES:
         dest = root / "bandai" / Path(rel).name
         dest.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy(shared_dir / "mocap" / rel, dest)
+        write_clip(dest)
     return root
 
 
@@ -134,7 +135,7 @@ def test_second_build_comes_from_the_cache(
         MotionWorld.build(tiny_mocap, tiny_world.path.parent, **dict(SMALL, seed=1))
 
 
-def test_build_errors(tmp_path: Path, shared_dir: Path) -> None:
+def test_build_errors(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="no such folder"):
         MotionWorld.build(tmp_path / "none", tmp_path / "cache")
     (tmp_path / "empty").mkdir()
@@ -142,7 +143,7 @@ def test_build_errors(tmp_path: Path, shared_dir: Path) -> None:
         MotionWorld.build(tmp_path / "empty", tmp_path / "cache")
     one = tmp_path / "one"
     one.mkdir()
-    shutil.copy(shared_dir / "mocap" / TINY_FILES[0], one)
+    write_clip(one / Path(TINY_FILES[0]).name)
     with pytest.raises(InputError, match="too few distinct motions"):
         MotionWorld.build(one, tmp_path / "cache", **SMALL)
     assert not any((tmp_path / "cache").glob("world-*"))  # nothing half-written

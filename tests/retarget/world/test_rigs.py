@@ -12,6 +12,7 @@ from pose_io.errors import InputError
 from retarget.world import WORLD_JOINTS, load_motion, skeleton_of
 from retarget.world.camera import facing_vectors
 from retarget.world.rigs import rig_naming
+from tests.retarget.world.humanoid import BANDAI_NAMCO, MAX3DS, MOTIONBUILDER, ROLES, humanoid_bvh
 
 J = WORLD_JOINTS.index
 
@@ -71,10 +72,12 @@ def test_left_is_the_characters_own_left(shared_dir: Path, rel: str, frames: int
     assert fwd @ travel / np.linalg.norm(travel) / np.linalg.norm(fwd) > 0.9
 
 
-def test_resampling_keeps_duration(shared_dir: Path) -> None:
-    path = shared_dir / "mocap" / "cmu_iclone" / "subjects" / "007" / "007_01.bvh.gz"
+def test_resampling_keeps_duration(tmp_path: Path) -> None:
+    path = tmp_path / "walk_120fps.bvh"
+    path.write_text(humanoid_bvh(MOTIONBUILDER, frames=241, step=1.2, swing=25.0, period=120.0, frame_time=1 / 120))
     a = load_motion(path, fps=60.0)
     b = load_motion(path, fps=30.0)
+    assert (a.num_frames, b.num_frames) == (121, 61)  # 2 s either way
     assert b.num_frames == (a.num_frames - 1) // 2 + 1
     # Same frames; only the ground level (a percentile over the frames kept) may move a little.
     diff = b.positions - a.positions[::2]
@@ -84,66 +87,7 @@ def test_resampling_keeps_duration(shared_dir: Path) -> None:
 
 
 # ---------------------------------------------------------------------------------------------------
-# Synthetic rigs: one humanoid written under several namings.
-
-_ROLES = {  # role -> (parent role, offset in cm, Y up, facing +Z, left = +X)
-    "hips": (None, (0, 95, 0)),
-    "spine": ("hips", (0, 10, 0)), "neck": ("spine", (0, 40, 0)), "head": ("neck", (0, 10, 0)),
-    "l_collar": ("spine", (3, 36, 0)), "l_shoulder": ("l_collar", (14, 0, 0)), "l_elbow": ("l_shoulder", (0, -30, 0)),
-    "l_wrist": ("l_elbow", (0, -25, 0)),
-    "r_collar": ("spine", (-3, 36, 0)), "r_shoulder": ("r_collar", (-14, 0, 0)), "r_elbow": ("r_shoulder", (0, -30, 0)),
-    "r_wrist": ("r_elbow", (0, -25, 0)),
-    "l_hip": ("hips", (9, -5, 0)), "l_knee": ("l_hip", (0, -42, 0)), "l_ankle": ("l_knee", (0, -41, 0)),
-    "l_toe": ("l_ankle", (0, -6, 14)),
-    "r_hip": ("hips", (-9, -5, 0)), "r_knee": ("r_hip", (0, -42, 0)), "r_ankle": ("r_knee", (0, -41, 0)),
-    "r_toe": ("r_ankle", (0, -6, 14)),
-}
-
-
-def humanoid_bvh(names: dict[str, str], scale: float = 1.0, frames: int = 4) -> str:
-    """A BVH of the humanoid above (names per role) walking forward 5 cm a frame."""
-    children: dict[str | None, list[str]] = {}
-    for role, (parent, _) in _ROLES.items():
-        children.setdefault(parent, []).append(role)
-    lines = ["HIERARCHY"]
-    order: list[str] = []
-
-    def emit(role: str, depth: int) -> None:
-        pad = "  " * depth
-        order.append(role)
-        off = " ".join(f"{v * scale:g}" for v in _ROLES[role][1])
-        lines.append(f"{pad}{'ROOT' if depth == 0 else 'JOINT'} {names[role]}")
-        lines.append(pad + "{")
-        lines.append(f"{pad}  OFFSET {off}")
-        chans = "6 Xposition Yposition Zposition Zrotation Xrotation Yrotation" if depth == 0 else "3 Zrotation Xrotation Yrotation"
-        lines.append(f"{pad}  CHANNELS {chans}")
-        kids = children.get(role, [])
-        for kid in kids:
-            emit(kid, depth + 1)
-        if not kids:
-            lines.extend([f"{pad}  End Site", pad + "  {", f"{pad}    OFFSET 0 {5 * scale:g} 0", pad + "  }"])
-        lines.append(pad + "}")
-
-    emit("hips", 0)
-    lines += ["MOTION", f"Frames: {frames}", "Frame Time: 0.0333333"]
-    for t in range(frames):
-        vals = [0.0, 95 * scale, 5.0 * t * scale, 0, 0, 0] + [0.0] * (3 * (len(order) - 1))
-        lines.append(" ".join(f"{v:g}" for v in vals))
-    return "\n".join(lines) + "\n"
-
-
-MOTIONBUILDER = {
-    "hips": "Hips", "spine": "Spine", "neck": "Neck", "head": "Head", "l_collar": "LeftShoulder",
-    "l_shoulder": "LeftArm", "l_elbow": "LeftForeArm", "l_wrist": "LeftHand", "l_hip": "LeftUpLeg",
-    "l_knee": "LeftLeg", "l_ankle": "LeftFoot", "l_toe": "LeftToeBase",
-}
-MOTIONBUILDER.update({k.replace("l_", "r_"): v.replace("Left", "Right") for k, v in MOTIONBUILDER.items() if k.startswith("l_")})
-MAX3DS = {
-    "hips": "Hips", "spine": "Chest", "neck": "Neck", "head": "Head", "l_collar": "LeftCollar",
-    "l_shoulder": "LeftShoulder", "l_elbow": "LeftElbow", "l_wrist": "LeftWrist", "l_hip": "LeftHip",
-    "l_knee": "LeftKnee", "l_ankle": "LeftAnkle", "l_toe": "LeftToe",
-}
-MAX3DS.update({k.replace("l_", "r_"): v.replace("Left", "Right") for k, v in MAX3DS.items() if k.startswith("l_")})
+# Synthetic rigs: one humanoid written under several namings (tests/retarget/world/humanoid.py).
 
 
 @pytest.mark.parametrize(
@@ -164,11 +108,7 @@ MAX3DS.update({k.replace("l_", "r_"): v.replace("Left", "Right") for k, v in MAX
             "l_knee": "L Calf", "l_ankle": "L Foot", "l_toe": "L Toe0", "r_collar": "R Clavicle",
             "r_shoulder": "R UpperArm", "r_elbow": "R Forearm", "r_wrist": "R Hand", "r_hip": "R Thigh",
             "r_knee": "R Calf", "r_ankle": "R Foot", "r_toe": "R Toe0"}.items()}, 1 / 2.54, "max_biped"),  # inches
-        ({"hips": "Hips", "spine": "Chest", "neck": "Neck", "head": "Head", "l_collar": "Shoulder_L",
-          "l_shoulder": "UpperArm_L", "l_elbow": "LowerArm_L", "l_wrist": "Hand_L", "l_hip": "UpperLeg_L",
-          "l_knee": "LowerLeg_L", "l_ankle": "Foot_L", "l_toe": "Toes_L", "r_collar": "Shoulder_R",
-          "r_shoulder": "UpperArm_R", "r_elbow": "LowerArm_R", "r_wrist": "Hand_R", "r_hip": "UpperLeg_R",
-          "r_knee": "LowerLeg_R", "r_ankle": "Foot_R", "r_toe": "Toes_R"}, 1.0, "bandai_namco"),
+        (BANDAI_NAMCO, 1.0, "bandai_namco"),
     ],
 )
 def test_namings_units_and_sides(tmp_path: Path, names: dict[str, str], scale: float, naming: str) -> None:
@@ -215,7 +155,7 @@ def test_unknown_rig_lists_unmapped_world_joints(tmp_path: Path) -> None:
 
 
 def test_user_json_mapping(tmp_path: Path) -> None:
-    names = {role: f"bone_{k}" for k, role in enumerate(_ROLES)}
+    names = {role: f"bone_{k}" for k, role in enumerate(ROLES)}
     path = tmp_path / "custom.bvh"
     path.write_text(humanoid_bvh(names))
     keys = {"l_hip": "l_hip", "r_hip": "r_hip", "l_knee": "l_knee", "r_knee": "r_knee", "l_ankle": "l_ankle",
