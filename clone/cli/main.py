@@ -15,6 +15,7 @@ import typer
 from clone import __version__
 from clone.cli import cloning
 from clone.cli.common import OneLineErrorGroup, setup_logging
+from clone.cli.cartoon import cartoon_command
 from clone.cli.demo import demo_command
 from clone.cli.pose import pose_app
 from clone.cli.report import report_command
@@ -53,6 +54,7 @@ app.command("train-ref")(cloning.train_ref)
 app.command("drive")(cloning.drive)
 app.command("report")(report_command)
 app.command("demo")(demo_command)
+app.command("cartoon")(cartoon_command)
 app.add_typer(pose_app, name="pose")
 app.add_typer(retarget_app, name="retarget")
 app.add_typer(world_app, name="world")

@@ -221,3 +221,67 @@ def evaluate(
         )
     typer.echo(table)
     console.print(f"wrote {out}: eval.json, eval.md and {len(doc['silhouettes'])} code plots in {doc['seconds']:.0f} s")
+
+
+@retarget_app.command("interpolate")
+@user_errors
+def interpolate(
+    a: Annotated[Path, typer.Argument(help="Clip A's poses: the grid's top-left corner; its third attribute is kept.")],
+    b: Annotated[Path, typer.Argument(help="Clip B's poses: the grid's bottom-right corner.")],
+    out: Annotated[Path, typer.Option("--out", help="Output: .mp4 (the grid drawn) or .npz (poses [S, S, T, 15, 2]).")],
+    vary: Annotated[
+        str, typer.Option("--vary", help="The two attributes blended, rows first: motion,view | motion,body | body,view.")
+    ] = "motion,view",
+    steps: Annotated[int, typer.Option("--steps", min=2, max=16, help="Cells per axis.")] = 5,
+    frames: Annotated[
+        int, typer.Option("--frames", min=8, help="At most this many frames; both clips are cut to the shorter one.")
+    ] = 120,
+    canvas: Annotated[
+        str,
+        typer.Option("--canvas", help="video: A's frame, codes and smoothing as `retarget apply`; authors: their "
+                     "interpolate.py (512-pixel canvas, root from (256, 256), whole-clip codes, no smoothing)."),
+    ] = "video",
+    cell: Annotated[int, typer.Option("--cell", min=32, max=512, help="Side of one cell of the video in pixels.")] = 128,
+    weights: Annotated[
+        Path | None,
+        typer.Option("--weights", help="clone2d checkpoint, or the authors' pretrained_full.pth (default: shipped)."),
+    ] = None,
+    size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
+) -> None:
+    """Blend two attributes of A's and B's codes on a STEPS x STEPS grid (paper Fig. 1); the third stays A's."""
+    import time
+
+    import numpy as np
+
+    from pose_io.atomic import atomic_file, check_new_output
+    from pose_io.errors import InputError
+    from pose_io.readers import parse_size, read_track
+    from pose_io.video import VideoWriter
+    from retarget.api import load_retargeter
+    from retarget.interpolate import CANVASES, grid_frames, interpolate_grid, parse_vary
+    from retarget.runtime import configure_threads
+
+    start = time.perf_counter()
+    check_new_output(out, overwrite)
+    if out.suffix.lower() not in (".mp4", ".npz"):
+        raise InputError(f"{out}: --out must end in .mp4 (the grid video) or .npz (the poses)")
+    if canvas not in CANVASES:
+        raise InputError(f"--canvas {canvas!r}; valid: {', '.join(CANVASES)}")
+    rows, cols = parse_vary(vary)
+    image_size = parse_size(size) if size else None
+    clip_a, clip_b = read_track(a, image_size=image_size), read_track(b, image_size=image_size)
+    configure_threads()
+    retargeter = load_retargeter(weights, device)
+    grid = interpolate_grid(retargeter, clip_a, clip_b, (rows, cols), steps, frames, canvas, names=(a.name, b.name))
+    if out.suffix.lower() == ".npz":
+        with atomic_file(out, overwrite=overwrite) as tmp, open(tmp, "wb") as f:
+            np.savez_compressed(f, **grid.to_arrays())
+    else:
+        with VideoWriter(out, grid.fps, overwrite=overwrite) as video:
+            for frame in grid_frames(grid, cell):
+                video.write(frame)
+    length = grid.poses.shape[2]
+    console.print(f"wrote {out} ({steps}x{steps} cells, {length} frames; {rows} down, {cols} across, {grid.kept} of "
+                  f"{a.name}; {canvas} canvas) in {time.perf_counter() - start:.1f} s")

@@ -1,0 +1,112 @@
+"""`clone cartoon`: a cartoon character of exaggerated proportions performs a driver's motion (paper Sec. 7).
+
+Heavy libraries are imported inside the command so that `clone --help` stays fast. Until the root app registers
+the command, ``python -m clone.cli.cartoon DRIVER --character ... --out ...`` runs it on its own.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from clone.cli.common import DEVICE_HELP, console, user_errors
+
+_CHARACTER_HELP = (
+    "A preset (standard, bighead, stubby, longarms, chibi) or a JSON file of part factors on a standard body, "
+    'e.g. {"name": "tiny legs", "legs": 0.5, "head": 1.5}.'
+)
+
+
+@user_errors
+def cartoon_command(
+    driver: Annotated[Path, typer.Argument(help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv).")],
+    character: Annotated[str, typer.Option("--character", help=_CHARACTER_HELP)],
+    out: Annotated[Path, typer.Option("--out", help="The cartoon video (.mp4), in the driver's frame size.")],
+    yaw: Annotated[
+        float | None,
+        typer.Option("--yaw", min=-90.0, max=90.0,
+                     help="View of the character in degrees (0 front, +90 its left side); default: the driver's."),
+    ] = None,
+    report: Annotated[
+        Path | None, typer.Option("--report", help="Measures as JSON (default: next to the video, OUT with .json).")
+    ] = None,
+    poses: Annotated[
+        Path | None, typer.Option("--poses", help="Also write the cartoon's body15 poses (.npz, .csv or a folder).")
+    ] = None,
+    weights: Annotated[
+        Path | None,
+        typer.Option("--weights", help="clone2d checkpoint, or the authors' pretrained_full.pth (default: shipped)."),
+    ] = None,
+    size: Annotated[
+        str | None, typer.Option("--size", help="Image size WxH of a driver that stores none (OpenPose JSON).")
+    ] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
+) -> None:
+    """Retarget DRIVER's motion onto a cartoon character, hold its proportions, draw it; report limb errors."""
+    import json
+    import time
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
+    from pose_io.atomic import atomic_file, check_new_output
+    from pose_io.errors import InputError
+    from pose_io.readers import parse_size, read_track
+    from pose_io.video import VideoWriter
+    from pose_io.writers import output_format, write_track
+    from retarget.api import load_retargeter
+    from retarget.runtime import configure_threads
+
+    start = time.perf_counter()
+    if out.suffix.lower() != ".mp4":
+        raise InputError(f"{out}: --out must be an .mp4 video")
+    report = report if report is not None else out.with_suffix(".json")
+    for path in (out, report, poses):
+        if path is not None:
+            check_new_output(path, overwrite)
+    if poses is not None:
+        output_format(poses)  # an unsupported suffix fails before any work
+    spec = load_character(character)
+    track = read_track(driver, image_size=parse_size(size) if size else None)
+    configure_threads()
+    retargeter = load_retargeter(weights, device)
+    cartoon = make_cartoon(track, spec, retargeter, yaw=yaw, name=str(driver))
+    with Progress(TextColumn("[bold]drawing"), BarColumn(), MofNCompleteColumn(), console=console,
+                  transient=True) as bar, VideoWriter(out, track.fps, overwrite=overwrite) as video:  # fmt: skip
+        task = bar.add_task("drawing", total=len(cartoon.track))
+        for frame in cartoon_frames(cartoon.track, cartoon.look):
+            video.write(frame)
+            bar.advance(task)
+    if poses is not None:
+        write_track(cartoon.track, poses, overwrite=overwrite)
+    document = {**cartoon.report, "driver": str(driver), "video": str(out),
+                "seconds": round(time.perf_counter() - start, 2)}
+    with atomic_file(report, overwrite=overwrite) as tmp:
+        tmp.write_text(json.dumps(document, indent=1) + "\n")
+    for line in summary_lines(cartoon.report):
+        console.print(line)
+    written = ", ".join(str(p) for p in (out, report, poses) if p is not None)
+    console.print(f"wrote {written} in {document['seconds']:.1f} s")
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the command on its own (``python -m clone.cli.cartoon DRIVER ...``), as `clone cartoon` runs it.
+
+    The command sits in a group of the root app's class, so usage errors end as the same one line. The group is
+    called "python -m" and the command "clone.cli.cartoon", which makes the usage line read as what was typed.
+    """
+    import sys
+
+    from clone.cli.common import OneLineErrorGroup, setup_logging
+
+    app = typer.Typer(cls=OneLineErrorGroup, add_completion=False, pretty_exceptions_enable=False)
+    app.callback()(lambda: setup_logging(False))
+    app.command("clone.cli.cartoon")(cartoon_command)
+    app(args=["clone.cli.cartoon", *(sys.argv[1:] if args is None else args)], prog_name="python -m")
+
+
+if __name__ == "__main__":
+    main()
