@@ -6,6 +6,10 @@ windows of all 8 combinations; the batch is augmented (:mod:`retarget.augment`) 
 self-reconstruction term. One checkpoint file (:mod:`retarget.checkpoint`) is rewritten atomically after
 every epoch and when the time budget ends; ``resume=True`` continues it exactly where it stopped.
 
+Under ``torchrun`` (:mod:`retarget.distributed`) every process trains its part of each global batch of
+``batch_size`` samples in DistributedDataParallel; rank 0 writes the checkpoint, which resumes under any
+number of processes. On CUDA the network runs in bfloat16 autocast (``amp``).
+
 The split interface used here (the motion world provides it)::
 
     split.num_motions, split.num_characters, split.num_views
@@ -26,13 +30,15 @@ from typing import Any, Protocol
 
 import numpy as np
 import torch
+from torch import nn
 from torch.utils.data import DataLoader, Dataset
 
 from pose_io.errors import InputError
 from pose_io.measures import skeleton_heights
 from pose_io.track import PoseTrack
+from retarget import distributed
 from retarget.augment import COMBOS, AugmentConfig, augment_targets, corrupt_inputs
-from retarget.checkpoint import RetargetWeights, load_checkpoint, load_weights, save_checkpoint
+from retarget.checkpoint import RetargetWeights, load_checkpoint, load_weights, save_checkpoint, unwrap
 from retarget.losses import LossConfig, objective, self_reconstruction
 from retarget.model import RetargetNet, variant_config
 from retarget.preprocess import (
@@ -312,37 +318,125 @@ def batch_tensors(
     return inputs, targets
 
 
-def train_step(
-    model: RetargetNet, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor], stats: NormStats,
-    config: TrainConfig, generator: torch.Generator, real: torch.Tensor | None = None,
-) -> dict[str, float]:
-    """One optimisation step; returns the loss terms as floats.
+def part_tensors(
+    windows: torch.Tensor, ids: torch.Tensor, stats: NormStats, config: TrainConfig, generator: torch.Generator,
+    part: slice, total: int,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Network inputs and targets of one rank's part of a global batch, augmented as one process would.
+
+    The augmentation draws its random numbers for a whole batch at once, sample after sample. This rank's
+    samples are put at ``part`` of a batch of ``total`` samples (zeros elsewhere), so they get exactly the
+    numbers a single process gives them and the generator ends in the same state on every rank; the zero
+    samples cost elementwise work only.
 
     Args:
-        model: the network (put in train mode).
-        optimizer: its optimizer.
-        batch: {"windows": [B, 8, T, 15, 2], "ids": [B, 2, 3]} on the model's device.
+        windows: [n, 8, T, 15, 2] the samples at ``part`` (canvas pixels).
+        ids: [n, 2, 3] their triple ids.
         stats: normalisation statistics.
         config: settings.
-        generator: random source of augmentation.
-        real: optional [R, T, 15, 2] real-track windows for the self-reconstruction term.
+        generator: random source, in the same state on every rank.
+        part: where the samples sit in the global batch.
+        total: samples in the global batch.
+
+    Returns:
+        (inputs, targets), each [n, 8, 30, T'].
     """
-    model.train()
-    inputs, targets = batch_tensors(batch["windows"], batch["ids"], stats, config, generator)
-    losses = objective(model, inputs, targets, stats, config.loss)
-    total = losses["total"]
+    if (part.start, part.stop) == (0, total):
+        return batch_tensors(windows, ids, stats, config, generator)
+    full = windows.new_zeros((total, *windows.shape[1:]))  # [total, 8, T, 15, 2]
+    full[part] = windows
+    full_ids = ids.new_zeros((total, *ids.shape[1:]))  # [total, 2, 3]
+    full_ids[part] = ids
+    inputs, targets = batch_tensors(full, full_ids, stats, config, generator)
+    return inputs[part], targets[part]
+
+
+class TrainLoss(nn.Module):
+    """The loss of one step as ONE module call, which is what DistributedDataParallel wraps.
+
+    The objective calls several methods of the network (the encoders, the decoder); DistributedDataParallel
+    only sees calls of ``forward``, so the whole objective is this module's forward.
+
+    Args:
+        net: the network.
+        stats: normalisation statistics.
+        config: settings.
+    """
+
+    def __init__(self, net: RetargetNet, stats: NormStats, config: TrainConfig) -> None:
+        super().__init__()
+        self.net = net
+        self.stats = stats
+        self.config = config
+
+    def forward(
+        self, inputs: torch.Tensor, targets: torch.Tensor, real_inputs: torch.Tensor | None = None,
+        real_targets: torch.Tensor | None = None, weight: float = 1.0,
+    ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
+        """Loss terms and what to minimise.
+
+        Args:
+            inputs: [B, 8, 30, T] normalised, corrupted network inputs.
+            targets: [B, 8, 30, T] normalised ground truth.
+            real_inputs: optional [R, 30, T] corrupted real-track windows (self-reconstruction).
+            real_targets: [R, 30, T] their clean windows.
+            weight: factor of the synthetic batch's mean loss (:func:`retarget.distributed.shard_weight`).
+
+        Returns:
+            ``(terms, objective)``: the terms as logged (means of this batch), and
+            ``weight * synthetic total + real term``.
+        """
+        cfg = self.config
+        losses = objective(self.net, inputs, targets, self.stats, cfg.loss)
+        minimise = losses["total"] if weight == 1.0 else weight * losses["total"]
+        if real_inputs is not None and real_targets is not None:
+            real = self_reconstruction(self.net, real_inputs, real_targets, self.stats, cfg.loss)
+            losses["real"] = cfg.real_weight * real["total"]
+            losses["total"] = losses["total"] + losses["real"]
+            minimise = minimise + losses["real"]
+        return losses, minimise
+
+
+def train_step(
+    model: nn.Module, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor], stats: NormStats,
+    config: TrainConfig, generator: torch.Generator, real: torch.Tensor | None = None, *,
+    part: slice | None = None, total: int | None = None, dtype: torch.dtype | None = None,
+) -> dict[str, float]:
+    """One optimisation step; returns the loss terms of this process's samples as floats.
+
+    Args:
+        model: the network, or its :class:`TrainLoss` (in DistributedDataParallel when several processes
+            train); put in train mode.
+        optimizer: its optimizer.
+        batch: {"windows": [n, 8, T, 15, 2], "ids": [n, 2, 3]} on the model's device: the batch, or this
+            process's ``part`` of a global batch.
+        stats: normalisation statistics.
+        config: settings.
+        generator: random source of augmentation (in the same state on every process).
+        real: optional [R, T, 15, 2] real-track windows for the self-reconstruction term (all of them on
+            every process: their term is small, and so the global step equals one process's).
+        part: where ``batch`` sits in the global batch (default: it is the whole batch).
+        total: samples in the global batch (default: those of ``batch``).
+        dtype: autocast dtype (bfloat16 on CUDA), None for float32.
+    """
+    loss_fn = model if isinstance(unwrap(model), TrainLoss) else TrainLoss(model, stats, config)
+    windows = batch["windows"]
+    total = len(windows) if total is None else total
+    # A part of the global batch weighs by its share; a whole batch is the same on every process (weight 1).
+    weight = 1.0 if part is None else distributed.shard_weight(part, total, distributed.current())
+    part = slice(0, total) if part is None else part
+    loss_fn.train()
+    inputs, targets = part_tensors(windows, batch["ids"], stats, config, generator, part, total)
+    real_inputs = real_targets = None
     if real is not None and len(real):
         length = inputs.shape[-1]
         clipped = real[:, :length] if real.shape[1] == length else _clip_real(real, length, generator)
         noisy = corrupt_inputs(clipped, config.augment.noise_std, config.augment.drop_prob, generator)
-        real_losses = self_reconstruction(
-            model, joints_to_channels(noisy, stats), joints_to_channels(clipped, stats), stats, config.loss
-        )
-        losses["real"] = config.real_weight * real_losses["total"]
-        total = total + losses["real"]
-        losses["total"] = total
+        real_inputs, real_targets = joints_to_channels(noisy, stats), joints_to_channels(clipped, stats)
+    with distributed.autocast(windows.device, dtype):
+        losses, minimise = loss_fn(inputs, targets, real_inputs, real_targets, weight)
     optimizer.zero_grad(set_to_none=True)
-    total.backward()
+    minimise.backward()
     optimizer.step()
     return {k: float(v.detach()) for k, v in losses.items()}
 
@@ -355,16 +449,18 @@ def _clip_real(real: torch.Tensor, length: int, generator: torch.Generator) -> t
 @torch.no_grad()
 def evaluate(
     model: RetargetNet, windows: torch.Tensor, ids: torch.Tensor, stats: NormStats, config: TrainConfig,
-    batch_size: int = 64,
+    batch_size: int = 64, dtype: torch.dtype | None = None,
 ) -> dict[str, float]:
-    """Mean loss terms over fixed validation samples (eval mode, no augmentation)."""
+    """Mean loss terms over fixed validation samples (eval mode, no augmentation; ``dtype``: autocast)."""
     model.eval()
     device = next(model.parameters()).device
     sums: dict[str, float] = {}
     for start in range(0, len(windows), batch_size):
         w, i = windows[start : start + batch_size].to(device), ids[start : start + batch_size].to(device)
         inputs, targets = batch_tensors(w, i, stats, config, torch.Generator(), augment=False)
-        for k, v in objective(model, inputs, targets, stats, config.loss).items():
+        with distributed.autocast(device, dtype):
+            terms = objective(model, inputs, targets, stats, config.loss)
+        for k, v in terms.items():
             sums[k] = sums.get(k, 0.0) + float(v) * len(w)
     return {k: v / len(windows) for k, v in sums.items()}
 
@@ -428,35 +524,47 @@ def fit(
     num_workers: int = 0,
     progress: ProgressFn | None = None,
     init: RetargetWeights | None = None,
+    amp: bool | None = None,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
+
+    In a process group (``torchrun``, see :mod:`retarget.distributed`) every process runs this function:
+    ``config.batch_size`` is the global batch, of which each process trains its part; the learning rate is
+    that of one process. Rank 0 reports progress, validates and writes ``out``.
 
     Args:
         train_split: training split of the motion world.
         val_split: validation split (None: no validation).
         out: checkpoint file; must not exist unless ``resume``.
         config: training settings.
-        device: where to train (the command line resolves ``--device``).
+        device: where to train (the command line resolves ``--device``; one GPU per process).
         real_tracks: unlabelled real tracks (self-reconstruction only).
         epochs: total epochs to reach; None = until ``minutes`` run out, or 300 when both are None.
         minutes: wall-clock budget of this call.
-        resume: continue the run stored in ``out``.
-        num_workers: data-loader worker processes.
-        progress: called after every step and every epoch (the library draws no bar).
+        resume: continue the run stored in ``out`` (written by any number of processes).
+        num_workers: data-loader worker processes (per process).
+        progress: called after every step and every epoch, on rank 0 only (the library draws no bar).
         init: weights to start from (ours or the authors'; their statistics are kept, since the
             weights are tied to them); ignored with ``resume``.
+        amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
 
     Returns:
-        A :class:`TrainSummary`.
+        A :class:`TrainSummary` (the same on every process).
 
     Raises:
-        InputError: ``out`` exists without ``resume``, or holds a run with other settings.
+        InputError: ``out`` exists without ``resume``, holds a run with other settings, or the batch is
+            smaller than the number of processes.
     """
     out = Path(out)
     dev = torch.device(device)
+    world = distributed.current()
     target_epochs = epochs if epochs is not None else (DEFAULT_EPOCHS if minutes is None else math.inf)
     deadline = time.monotonic() + 60.0 * minutes if minutes is not None else math.inf
     started = time.monotonic()
+    try:
+        part = distributed.shard(config.batch_size, world)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
 
     if resume:
         state = _resume_state(out, config)
@@ -484,6 +592,8 @@ def fit(
             stats = split_statistics(train_split, config.window, config.stats_windows, config.seed, scales)
         training = None
     model.to(dev)
+    step_loss = distributed.wrap(TrainLoss(model, stats, config), dev)  # DDP with several processes
+    dtype = distributed.amp_dtype(dev, amp)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=config.amsgrad)
     scheduler = torch.optim.lr_scheduler.ExponentialLR(optimizer, config.lr_decay)
     generator = torch.Generator().manual_seed(config.seed)
@@ -491,7 +601,7 @@ def fit(
     if training is not None:
         optimizer.load_state_dict(training["optimizer"])
         scheduler.load_state_dict(training["scheduler"])
-        torch.set_rng_state(training["torch_rng"])
+        torch.set_rng_state(training["torch_rng"])  # rank 0's; other ranks re-seed every step
         generator.set_state(training["augment_rng"])
         real_rng.bit_generator.state = training["real_rng"]
     done = training or {}
@@ -505,64 +615,75 @@ def fit(
     dataset = CrossSamples(train_split, config.window, config.variant, size, config.seed, scales)
     steps_per_epoch = max(1, size // config.batch_size)
     val = None
-    if val_split is not None:
+    if val_split is not None and world.is_main:
         val = _validation_set(val_split, config, body_scales(val_split, config, preprocess.body_height))
     real = torch.from_numpy(real_windows(real_tracks, config.window, preprocess)) if real_tracks else None
 
     def save() -> None:
-        save_checkpoint(out, model, stats, preprocess, training={
-            "config": config.to_dict(), "init": init_from, "epoch": epoch, "step": step_in_epoch, "global_step": global_step,
-            "optimizer": optimizer.state_dict(), "scheduler": scheduler.state_dict(),
-            "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
-            "real_rng": real_rng.bit_generator.state,
-            "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
-        })
+        # Nothing in it depends on the number of processes (see retarget.distributed).
+        if world.is_main:
+            save_checkpoint(out, model, stats, preprocess, training={
+                "config": config.to_dict(), "init": init_from, "epoch": epoch, "step": step_in_epoch,
+                "global_step": global_step, "optimizer": optimizer.state_dict(), "scheduler": scheduler.state_dict(),
+                "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
+                "real_rng": real_rng.bit_generator.state,
+                "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
+            })
+        distributed.barrier()
 
-    def report(losses: dict[str, float]) -> None:
-        if progress is not None:
-            progress(TrainProgress(epoch + 1, step_in_epoch, steps_per_epoch, global_step, losses))
+    def report(update: TrainProgress) -> None:
+        if progress is not None and world.is_main:
+            progress(update)
 
     stopped = "epochs"
     while epoch < target_epochs:
         dataset.epoch = epoch
         sums: dict[str, float] = {}
         counted = 0
-        loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers)
+        loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers, part,
+                         pin=dev.type == "cuda")
         out_of_time = False
         for batch in loader:
-            batch = {k: v.to(dev) for k, v in batch.items()}
+            if world.rank > 0:  # rank 0 continues the stored generator, as a single process does
+                torch.manual_seed(distributed.rank_seed(config.seed, world.rank, global_step))
+            batch = {k: v.to(dev, non_blocking=True) for k, v in batch.items()}
             real_batch = None
             if real is not None and len(real):
                 pick = real_rng.choice(len(real), min(config.real_batch_size, len(real)), replace=False)
                 real_batch = real[torch.from_numpy(pick)].to(dev)
-            losses = train_step(model, optimizer, batch, stats, config, generator, real_batch)
+            losses = train_step(step_loss, optimizer, batch, stats, config, generator, real_batch, part=part,
+                                total=config.batch_size, dtype=dtype)
+            late = time.monotonic() > deadline
+            losses, (late,) = distributed.reduce_logs(losses, part.stop - part.start, [late])
             for k, v in losses.items():
                 sums[k] = sums.get(k, 0.0) + v
             counted += 1
             step_in_epoch += 1
             global_step += 1
-            report(losses)
-            if time.monotonic() > deadline and step_in_epoch < steps_per_epoch:
+            report(TrainProgress(epoch + 1, step_in_epoch, steps_per_epoch, global_step, losses))
+            if late and step_in_epoch < steps_per_epoch:
                 out_of_time = True
                 break
         if out_of_time:
             save()
             stopped = "time"
-            log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
+            if world.is_main:
+                log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
             break
         epoch += 1
         step_in_epoch = 0
         scheduler.step()
         record = {"epoch": float(epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
         if val is not None:
-            record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config).items()})
+            record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config, dtype=dtype).items()})
         record["seconds"] = elapsed_before + time.monotonic() - started
+        record = distributed.broadcast(record)  # rank 0 validated
         history.append(record)
         save()
-        if progress is not None:
-            progress(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
-        log.info("epoch %d: %s", epoch, _format(record))
-        if time.monotonic() > deadline:
+        report(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
+        if world.is_main:
+            log.info("epoch %d: %s", epoch, _format(record))
+        if distributed.any_rank(time.monotonic() > deadline):
             stopped = "time" if epoch < target_epochs else "epochs"
             break
     return TrainSummary(out, epoch, global_step, stopped, history)
@@ -600,12 +721,25 @@ def _validation_set(
     return windows, ids
 
 
-def _loader(dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int) -> Iterator:
-    indices = range(first_step * batch_size, steps * batch_size)
+def _loader(
+    dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int, part: slice | None = None,
+    pin: bool = False,
+) -> Iterator:
+    """Batches of steps ``first_step`` to ``steps``; with ``part``, this process's samples of each global batch.
+
+    Step s of an epoch is samples ``[s * batch_size, (s + 1) * batch_size)`` whatever the number of
+    processes; a process takes ``part`` of them.
+    """
+    if part is None or (part.start, part.stop) == (0, batch_size):
+        indices: Sequence[int] = range(first_step * batch_size, steps * batch_size)
+        per_step = batch_size
+    else:
+        indices = [s * batch_size + i for s in range(first_step, steps) for i in range(part.start, part.stop)]
+        per_step = part.stop - part.start
     # Its own generator: a loader would otherwise draw its worker seed from the global RNG, and a resumed
     # run would then drop out differently. Samples depend on (seed, epoch, index) only.
-    loader = DataLoader(dataset, batch_size=batch_size, sampler=indices, num_workers=workers, drop_last=True,
-                        generator=torch.Generator())
+    loader = DataLoader(dataset, batch_size=per_step, sampler=indices, num_workers=workers, drop_last=True,
+                        generator=torch.Generator(), pin_memory=pin)
     return iter(loader)
 
 
@@ -628,8 +762,12 @@ def train(
     num_workers: int = 0,
     progress: ProgressFn | None = None,
     init: str | Path | None = None,
+    amp: bool | None = None,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
+
+    Under ``torchrun`` every process calls this (see :func:`fit`); the first process of each machine builds
+    the world's cache while the others wait, then they read it.
 
     Args:
         mocap_dir: motion-capture folder the world is built from.
@@ -644,6 +782,7 @@ def train(
         num_workers: data-loader worker processes (cutting world windows overlaps the network's work).
         progress: callback (see :func:`fit`).
         init: checkpoint to start from: ours, or the authors' ``pretrained_*.pth`` with its statistics.
+        amp: bfloat16 autocast on CUDA (see :func:`fit`).
     """
     from retarget.world import MotionWorld
 
@@ -654,8 +793,9 @@ def train(
         _require_new(out)
     start = load_weights(init) if init is not None and not resume else None
     real = read_real_tracks(real_dir) if real_dir is not None else []
-    world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
+    with distributed.main_first():
+        world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
     return fit(
         world.split("train"), world.split("val"), out, config, device, real, epochs, minutes, resume,
-        num_workers=num_workers, progress=progress, init=start,
+        num_workers=num_workers, progress=progress, init=start, amp=amp,
     )

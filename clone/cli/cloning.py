@@ -30,7 +30,9 @@ def train_ref(
     steps: Annotated[int | None, typer.Option(
         "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes).")] = None,
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
-    batch_size: Annotated[int, typer.Option("--batch-size", min=1, help="Samples per step.")] = 1,
+    batch_size: Annotated[int | None, typer.Option(
+        "--batch-size", min=1, help="Samples per step over all processes (under torchrun each takes its share; "
+        "the learning rate is that of one process). Default 1; when resuming, the stored one.")] = None,
     canvas: Annotated[CanvasMode, typer.Option(
         "--canvas", parser=CanvasMode, help="crop: around the performer; full: the letterboxed frame.")
     ] = CanvasMode.CROP,
@@ -44,6 +46,9 @@ def train_ref(
     ] = Align.EXACT,
     weights: Annotated[Path | None, typer.Option(
         "--weights", help="Retargeting weights for the reference's codes (default: the shipped ones).")] = None,
+    amp: Annotated[bool | None, typer.Option(
+        "--amp/--no-amp", help="bfloat16 mixed precision on CUDA (default: on where the GPU supports it); "
+        "ignored on the CPU.")] = None,
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
@@ -54,28 +59,45 @@ def train_ref(
     Beside it: a preview image (pose | generated | real).
 
     An existing model is never replaced unless --resume or --overwrite is given.
+
+    Runs unchanged under torchrun (one process per CPU share or GPU); rank 0 reports and writes the model.
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from clone.networks import default_depth
     from clone.train_ref import TrainConfig, TrainProgress, train_reference
     from pose_io.errors import InputError
+    from retarget import distributed
+    from retarget.runtime import free_cores
 
     if size is not None:
         try:
             default_depth(size)
         except ValueError as exc:
             raise InputError(f"--size: {exc}") from None
+    try:
+        launch = distributed.from_environment()
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if launch is not None and threads is None:  # the processes of one machine share its free cores
+        threads = distributed.cpu_threads(launch, free_cores())
     dev = resolve_device_option(device, threads)
     if resume:
-        # The stored run's settings apply; a --size given must match it.
-        config = TrainConfig(size=size, batch_size=batch_size) if size is not None else None
-    else:
-        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size)
+        # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
+        # stored one (e.g. to resume on more processes than the stored batch has samples).
+        config = None
+        if size is not None or batch_size is not None:
+            from clone.train_ref import load_resumable
 
-    with Progress(
+            stored = load_resumable(out).training["config"]
+            config = TrainConfig(size=size if size is not None else int(stored["size"]),
+                                 batch_size=batch_size if batch_size is not None else int(stored["batch_size"]))
+    else:
+        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1)
+
+    with distributed.launched(dev) as dev, Progress(
         TextColumn("[bold]train-ref"), BarColumn(), TextColumn("{task.fields[info]}"), TimeElapsedColumn(),
-        TimeRemainingColumn(), console=console, transient=True,
+        TimeRemainingColumn(), console=console, transient=True, disable=not distributed.current().is_main,
     ) as bar:
         task = bar.add_task("train", total=None, info="reading frames")
 
@@ -92,8 +114,11 @@ def train_ref(
 
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
-            overwrite=overwrite, align=align.value, weights=weights, progress=update,
+            overwrite=overwrite, align=align.value, weights=weights, progress=update, amp=amp,
         )
+        main = distributed.current().is_main
+    if not main:  # rank 0 reports
+        return
     skipped = f", {result.skipped_frames} skipped (no usable pose)" if result.skipped_frames else ""
     codes = "with retargeting codes" if result.has_codes else "without retargeting codes (drive with --weights)"
     state = " (interrupted)" if result.interrupted else ""

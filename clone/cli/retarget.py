@@ -112,14 +112,28 @@ def train(
     spread_weight: Annotated[
         float, typer.Option("--spread-weight", min=0.0, help="Weight of the range-of-motion loss (0 = the paper).")
     ] = 0.0,
+    # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
+    batch_size: Annotated[
+        int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
+                          "takes its share; the learning rate is that of one process).")
+    ] = 64,
+    amp: Annotated[
+        bool | None, typer.Option("--amp/--no-amp", help="bfloat16 mixed precision on CUDA (default: on where the "
+                                  "GPU supports it); ignored on the CPU.")
+    ] = None,
 ) -> None:
-    """Train the retargeting network on the motion world built from --mocap."""
+    """Train the retargeting network on the motion world built from --mocap.
+
+    Runs unchanged under torchrun (one process per CPU share or GPU); rank 0 reports and writes --out.
+    """
     import dataclasses
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from pose_io.errors import InputError
+    from retarget import distributed
     from retarget.losses import ablation_config
+    from retarget.runtime import free_cores
     from retarget.train import TrainConfig, TrainProgress
     from retarget.train import train as run_training
 
@@ -128,12 +142,17 @@ def train(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
         )
-        config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr)
+        config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size)
+        launch = distributed.from_environment()
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    if launch is not None and threads is None:  # the processes of one machine share its free cores
+        threads = distributed.cpu_threads(launch, free_cores())
     dev = resolve_device_option(device, threads)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("{task.fields[losses]}"), console=console) as bar:  # fmt: skip
+    with distributed.launched(dev) as dev, Progress(
+        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+        TextColumn("{task.fields[losses]}"), console=console, disable=not distributed.current().is_main,
+    ) as bar:
         task = bar.add_task("epoch 1", total=None, losses="")
 
         def update(p: TrainProgress) -> None:
@@ -145,10 +164,12 @@ def train(
 
         summary = run_training(
             mocap, out, cache_dir=cache, real_dir=real, config=config, device=dev, epochs=epochs,
-            minutes=minutes, resume=resume, num_workers=workers, init=init, progress=update,
+            minutes=minutes, resume=resume, num_workers=workers, init=init, progress=update, amp=amp,
         )
+        main = distributed.current().is_main
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
-    console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
+    if main:
+        console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
 
 
 @retarget_app.command("eval")

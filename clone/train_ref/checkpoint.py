@@ -5,6 +5,11 @@
 ``trainer`` (:meth:`Trainer.state_dict`: discriminator, both optimisers, step) and ``rng`` (the state of the
 run's CPU generator, which picks samples and draws the augmentation). Since nothing lives beside the model,
 the state of one model cannot be resumed with the weights of another.
+
+None of it depends on the number of processes that trained (``torchrun``, see :mod:`retarget.distributed`):
+the networks and optimisers are the same on every process, and the generator, which draws the numbers of the
+whole global batch on every process, is in the same state on all of them. Rank 0 writes the file; a model
+resumes under any number of processes.
 """
 
 from __future__ import annotations

@@ -3,7 +3,14 @@
 A run reads the reference (:mod:`clone.train_ref.data`), builds or resumes the :class:`Trainer`, steps it on
 augmented batches until the step or time budget is spent, writes previews (pose map | generated | real) and
 checkpoints the model file with its training state (:mod:`clone.train_ref.checkpoint`). Progress goes to a
-callback; the caller draws it. Ctrl-C ends the run early and still saves.
+callback; the caller draws it. Ctrl-C ends the run early and still saves (in a single process).
+
+Under ``torchrun`` every process runs :func:`train_reference` (see :mod:`retarget.distributed`): each reads
+the whole reference, the batch size is the GLOBAL batch, of which process r trains its contiguous part, and the
+run's generator (sample choice, augmentation) draws the numbers of the whole batch on every process, so a step
+is one process's step and the stored state resumes under any number of processes. Rank 0 reports, writes
+the previews and the model; the others wait for it. The periodic save and the time budget are decided on
+rank 0's clock and shared, so that every process stops after the same step.
 """
 
 from __future__ import annotations
@@ -12,7 +19,7 @@ import logging
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -37,6 +44,7 @@ from clone.train_ref.preview import preview_grid, preview_rows, write_png
 from clone.train_ref.trainer import Trainer
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget import distributed
 
 if TYPE_CHECKING:
     from pose_io.video import Frames
@@ -91,16 +99,21 @@ class _Run:
     seconds_before: float  # training time of earlier runs of this model
     progress: ProgressFn | None
     started: float = 0.0  # time.perf_counter() when stepping began
+    world: distributed.World = field(default_factory=distributed.World)
+    part: slice | None = None  # this process's samples of each global batch (None: all)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.started
 
     def save(self) -> None:
-        save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng,
-                        self.seconds_before + self.elapsed())
+        """Rank 0 writes the model file (nothing in it depends on the number of processes); all wait for it."""
+        if self.world.is_main:
+            save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng,
+                            self.seconds_before + self.elapsed())
+        distributed.barrier()
 
     def report(self, progress: TrainProgress) -> None:
-        if self.progress is not None:
+        if self.progress is not None and self.world.is_main:
             self.progress(progress)
 
 
@@ -118,8 +131,9 @@ def train_reference(
     align: str = "exact",
     weights: str | os.PathLike | None = None,
     progress: ProgressFn | None = None,
+    amp: bool | None = None,
 ) -> TrainResult:
-    """Train (or continue training) a reference model.
+    """Train (or continue training) a reference model (in every process of a ``torchrun`` group, if any).
 
     Args:
         poses_path: the reference's poses (any format ``pose_io`` reads).
@@ -127,32 +141,41 @@ def train_reference(
         out: the model file to write (with its training state inside).
         config: settings of a new run (default ``TrainConfig()``). When resuming, the stored run's settings
             apply; of ``config`` only ``batch_size``, ``preview_every`` and ``save_every_s`` are taken, and
-            a different ``size`` is an error.
+            a different ``size`` is an error. ``batch_size`` is the global batch over all processes.
         steps: stop when the model has been trained this many steps in total.
         minutes: stop after this many minutes of training in this run (reading the frames not counted).
-        device: where to train.
+        device: where to train (one GPU per process).
         resume: continue the model at ``out`` from the training state stored in it.
         overwrite: replace an existing model at ``out`` with a new one.
         align: ``exact`` or ``trim`` (see :func:`read_reference`).
         weights: retargeting weights for the reference codes (default: the shipped ones, if present).
-        progress: called after every step (and every frame read).
+        progress: called after every step (and every frame read), on rank 0 only.
+        amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
 
     Returns:
         What was done.
 
     Raises:
         InputError: bad options, unreadable or mismatched inputs, an existing ``out`` without ``resume`` or
-            ``overwrite``, or ``resume`` of a model without training state.
+            ``overwrite``, ``resume`` of a model without training state, or a batch smaller than the number
+            of processes.
     """
     out = Path(out)
     _check_options(resume, overwrite, steps, minutes)
     previous, config = _previous_and_config(out, config, resume, overwrite)
+    world = distributed.current()
+    try:
+        part = distributed.shard(config.batch_size, world)
+    except ValueError as exc:
+        raise InputError(f"--batch-size: {exc}") from None
     if steps is None and minutes is None:
         steps = config.steps
     track, frames, count = read_reference(poses_path, frames_path, align)
     usable = _usable(track, config.min_visible_joints, poses_path, count)
     reference = _reference_info(track, usable, config, previous, frames_path, weights)
-    run = _start_run(out, reference, config, torch.device(device), previous, progress)
+    device = torch.device(device)
+    run = _start_run(out, reference, config, device, previous, progress, distributed.amp_dtype(device, amp))
+    run.world, run.part = world, part
     start_step = run.trainer.step_count
 
     # Training needs autograd whatever mode the caller left torch in.
@@ -161,7 +184,8 @@ def train_reference(
         rows = preview_rows(data.indices)
         run.started = time.perf_counter()  # --minutes counts training only
         losses, interrupted = _train_steps(run, data, rows, steps, minutes * 60.0 if minutes is not None else None)
-        write_png(preview_grid(run.trainer, data, rows), preview_path(out))
+        if world.is_main:
+            write_png(preview_grid(run.trainer, data, rows), preview_path(out))
         run.save()
 
     return TrainResult(
@@ -227,12 +251,12 @@ def _reference_info(
 
 def _start_run(
     out: Path, reference: ReferenceInfo, config: TrainConfig, device: torch.device,
-    previous: ReferenceModel | None, progress: ProgressFn | None,
+    previous: ReferenceModel | None, progress: ProgressFn | None, dtype: torch.dtype | None = None,
 ) -> _Run:
     """Seeded networks and random generator, restored from ``previous`` when resuming."""
     torch.manual_seed(config.seed)
     generator = previous.build_generator(device).train() if previous is not None else None
-    trainer = Trainer(config, device, generator)
+    trainer = Trainer(config, device, generator, dtype)
     rng = torch.Generator().manual_seed(config.seed)
     seconds_before = 0.0
     if previous is not None:
@@ -256,16 +280,28 @@ def _read_frames(run: _Run, frames: Frames, count: int, usable: np.ndarray, stor
 def _train_steps(
     run: _Run, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None
 ) -> tuple[dict[str, float], bool]:
-    """Step until ``steps`` in total or ``limit_s`` seconds; returns ``(last losses, interrupted)``."""
-    trainer, config = run.trainer, run.config
+    """Step until ``steps`` in total or ``limit_s`` seconds; returns ``(last losses, interrupted)``.
+
+    The losses are means over the global batch. Whether the time is up, or a periodic save due, is decided on
+    rank 0's clock and shared with the losses, so that every process stops (and waits for a save) together.
+    """
+    trainer, config, world = run.trainer, run.config, run.world
     losses: dict[str, float] = {}
     last_save = time.perf_counter()
+    samples = config.batch_size if run.part is None else run.part.stop - run.part.start
+
+    def time_up() -> bool:
+        return world.is_main and limit_s is not None and run.elapsed() >= limit_s
+
+    stop = distributed.any_rank(time_up())
     try:
-        while (steps is None or trainer.step_count < steps) and (limit_s is None or run.elapsed() < limit_s):
+        while (steps is None or trainer.step_count < steps) and not stop:
             losses = _one_step(run, data)
-            if trainer.step_count % config.preview_every == 0:
+            save_due = world.is_main and time.perf_counter() - last_save > config.save_every_s
+            losses, (stop, save_due) = distributed.reduce_logs(losses, samples, [time_up(), save_due])
+            if trainer.step_count % config.preview_every == 0 and world.is_main:
                 write_png(preview_grid(trainer, data, rows), preview_path(run.out))
-            if time.perf_counter() - last_save > config.save_every_s:
+            if save_due:
                 run.save()
                 last_save = time.perf_counter()
             run.report(TrainProgress("training", trainer.step_count, steps, run.elapsed(), limit_s, losses))
@@ -276,10 +312,18 @@ def _train_steps(
 
 
 def _one_step(run: _Run, data: ReferenceData) -> dict[str, float]:
-    """One augmented batch, one update of G and D."""
+    """One augmented batch (this process's part of it), one update of G and D; this part's mean losses.
+
+    The random numbers of the whole batch are drawn on every process, each keeps those of its part.
+    """
     config, rng, trainer = run.config, run.rng, run.trainer
-    pick = torch.randint(len(data.indices), (config.batch_size,), generator=rng).numpy()
-    sample = data.batch(data.indices[pick])
-    sample = warp_batch(sample, random_affines(config.batch_size, data.size, config.augment, rng))
-    sample = {k: v.to(trainer.device) for k, v in sample.items()}
-    return trainer.train_step(sample, *trainer.previous_input(sample, rng))
+    total = config.batch_size
+    part = slice(0, total) if run.part is None else run.part
+    pick = torch.randint(len(data.indices), (total,), generator=rng).numpy()
+    matrices = random_affines(total, data.size, config.augment, rng)  # [total, 2, 3]
+    sample = warp_batch(data.batch(data.indices[pick[part]]), matrices[part])
+    pin = trainer.device.type == "cuda"
+    sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
+    prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)
+    weight = distributed.shard_weight(part, total, run.world)
+    return trainer.train_step(sample, prev_input, fake_prev, weight)

@@ -3,6 +3,11 @@
 G trains on ``(pose map t, previous frame)`` -> frame t with L1 to the real frame, least-squares GAN and
 pix2pixHD's feature matching on D's activations; D judges the consecutive pair
 ``(pose t-1, pose t, frame t-1, frame t)``, real frames against G's. Images are ``[B, 3, S, S]`` in [-1, 1].
+
+Under ``torchrun`` (:mod:`retarget.distributed`) both networks train in DistributedDataParallel: each process
+steps on its part of the global batch, and the random numbers of the whole batch are drawn on every process
+(:meth:`Trainer.previous_input`), so the step is that of one process. On CUDA the networks run in bfloat16
+autocast when ``dtype`` says so.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from clone.networks import (
 )
 from clone.train_ref.augment import degrade_previous
 from clone.train_ref.config import TrainConfig
+from retarget import distributed
 
 
 class Trainer:
@@ -32,30 +38,49 @@ class Trainer:
 
     Args:
         config: the run's settings.
-        device: where the networks live.
+        device: where the networks live (this process's GPU under ``torchrun``).
         generator: an existing generator (resuming); a fresh one when None.
+        dtype: autocast dtype of the networks (bfloat16 on CUDA), None for float32.
     """
 
-    def __init__(self, config: TrainConfig, device: torch.device, generator: UNetGenerator | None = None) -> None:
+    def __init__(
+        self, config: TrainConfig, device: torch.device, generator: UNetGenerator | None = None,
+        dtype: torch.dtype | None = None,
+    ) -> None:
         self.config = config
         self.device = device
+        self.dtype = dtype
         self.g = (generator or build_generator("unet", config.generator_config())).to(device).train()
         self.d: PatchDiscriminator = build_discriminator("patch", config.discriminator_config()).to(device).train()
+        # The training step calls these (DistributedDataParallel with several processes); everything else,
+        # previews and checkpoints, the plain networks.
+        self._g_step = distributed.wrap(self.g, device)
+        self._d_step = distributed.wrap(self.d, device)
         betas = (config.beta1, 0.999)
         self.opt_g = torch.optim.Adam(self.g.parameters(), lr=config.lr, betas=betas)
         self.opt_d = torch.optim.Adam(self.d.parameters(), lr=config.lr, betas=betas)
         self.step_count = 0
 
     def generate(self, pose: Tensor, prev: Tensor) -> Tensor:
-        """G's frame for [B, 3, S, S] pose maps and previous frames."""
-        return self.g(generator_input(pose, prev) if self.config.temporal else pose)
+        """G's frame (float32) for [B, 3, S, S] pose maps and previous frames."""
+        with distributed.autocast(self.device, self.dtype):
+            return self.g(generator_input(pose, prev) if self.config.temporal else pose).float()
 
-    def previous_input(self, sample: dict[str, Tensor], generator: torch.Generator) -> tuple[Tensor, Tensor]:
+    def previous_input(
+        self, sample: dict[str, Tensor], generator: torch.Generator, part: slice | None = None,
+        total: int | None = None,
+    ) -> tuple[Tensor, Tensor]:
         """What G gets as the previous frame, and the previous frame D sees in a fake pair.
 
         ``prev_source == "real"``: the real previous frame, degraded; D's fake pair starts from the real one.
         ``prev_source == "generated"``: G's own frame for ``t-1`` made from zeros (no gradient), degraded, as
         in Everybody Dance Now; D's fake pair is then entirely generated.
+
+        Args:
+            sample: the batch, or this process's ``part`` of a global batch of ``total`` samples.
+            generator: the run's CPU generator (in the same state on every process).
+            part: where ``sample`` sits in the global batch (default: it is the whole batch).
+            total: samples in the global batch.
 
         Returns:
             ``(G's previous-frame input, D's previous frame)``, both [B, 3, S, S].
@@ -66,46 +91,60 @@ class Trainer:
                 prev = self.generate(sample["pose_prev"], torch.zeros_like(sample["frame_prev"]))
         else:
             prev = sample["frame_prev"]
-        prev = torch.where(sample["has_prev"][:, None, None, None], prev, 0.0)
-        return degrade_previous(prev, sample["has_prev"], cfg.augment, cfg.prev_dropout, generator), prev
+        has_prev = sample["has_prev"]
+        prev = torch.where(has_prev[:, None, None, None], prev, 0.0)
+        if part is None or total is None or (part.start, part.stop) == (0, total):
+            return degrade_previous(prev, has_prev, cfg.augment, cfg.prev_dropout, generator), prev
+        # The degradation draws its numbers for the whole batch: put this part in a batch of zeros so that it
+        # gets those a single process gives it, and the generator ends alike on every process.
+        full = prev.new_zeros((total, *prev.shape[1:]))  # [total, 3, S, S]
+        full[part] = prev
+        full_has = has_prev.new_zeros(total)
+        full_has[part] = has_prev
+        return degrade_previous(full, full_has, cfg.augment, cfg.prev_dropout, generator)[part], prev
 
-    def train_step(self, sample: dict[str, Tensor], prev_input: Tensor, fake_prev: Tensor | None = None
-                   ) -> dict[str, float]:
+    def train_step(self, sample: dict[str, Tensor], prev_input: Tensor, fake_prev: Tensor | None = None,
+                   weight: float = 1.0) -> dict[str, float]:
         """One update of G and then of D.
 
         Args:
             sample: the (augmented) batch of :meth:`ReferenceData.batch`, on the device.
             prev_input: [B, 3, S, S] what G gets as the previous frame.
             fake_prev: [B, 3, S, S] previous frame of D's fake pairs (default: the real one).
+            weight: factor of this process's mean losses (:func:`retarget.distributed.shard_weight`).
 
         Returns:
-            Loss values.
+            Loss values (means over ``sample``).
         """
         w = self.config.loss
         real = sample["frame_cur"]
-        fake = self.generate(sample["pose_cur"], prev_input)  # [B, 3, S, S]
         pair = (sample["pose_prev"], sample["pose_cur"], sample["frame_prev"])
         real_in = discriminator_input(*pair, real)  # [B, 12, S, S]
         fake_pair = (sample["pose_prev"], sample["pose_cur"], sample["frame_prev"] if fake_prev is None else fake_prev)
 
-        self.d.requires_grad_(False)
-        fake_feats = self.d(discriminator_input(*fake_pair, fake))
-        with torch.no_grad():
-            real_feats = self.d(real_in)
-        l1 = F.l1_loss(fake, real)
-        gan = lsgan_loss(fake_feats[-1], True)
-        fm = feature_matching_loss(fake_feats, real_feats)
-        loss_g = w.l1 * l1 + w.gan * gan + w.feature_matching * fm
+        with distributed.autocast(self.device, self.dtype):
+            g_in = generator_input(sample["pose_cur"], prev_input) if self.config.temporal else sample["pose_cur"]
+            fake = self._g_step(g_in).float()  # [B, 3, S, S]
+            # The plain D: its parameters get no gradient here, which DistributedDataParallel would wait for.
+            self.d.requires_grad_(False)
+            fake_feats = self.d(discriminator_input(*fake_pair, fake))
+            with torch.no_grad():
+                real_feats = self.d(real_in)
+            l1 = F.l1_loss(fake, real)
+            gan = lsgan_loss(fake_feats[-1].float(), True)
+            fm = feature_matching_loss([f.float() for f in fake_feats], [f.float() for f in real_feats])
+            loss_g = w.l1 * l1 + w.gan * gan + w.feature_matching * fm
         self.opt_g.zero_grad(set_to_none=True)
-        loss_g.backward()
+        (loss_g if weight == 1.0 else weight * loss_g).backward()
         self.opt_g.step()
 
         self.d.requires_grad_(True)
-        d_real = self.d(real_in)[-1]
-        d_fake = self.d(discriminator_input(*fake_pair, fake.detach()))[-1]
-        loss_d = 0.5 * (lsgan_loss(d_real, True) + lsgan_loss(d_fake, False))
+        with distributed.autocast(self.device, self.dtype):
+            d_real = self._d_step(real_in)[-1].float()
+            d_fake = self._d_step(discriminator_input(*fake_pair, fake.detach()))[-1].float()
+            loss_d = 0.5 * (lsgan_loss(d_real, True) + lsgan_loss(d_fake, False))
         self.opt_d.zero_grad(set_to_none=True)
-        loss_d.backward()
+        (loss_d if weight == 1.0 else weight * loss_d).backward()
         self.opt_d.step()
         self.step_count += 1
         return {"l1": l1.item(), "gan": gan.item(), "fm": fm.item(), "d": loss_d.item()}
