@@ -34,6 +34,7 @@ STAGES: dict[str, tuple[str, bool]] = {
     "train_quality": ("bench.train_quality", False),
     "drive": ("bench.drive", True),
     "gpu": ("bench.gpu", True),
+    "search": ("bench.search", True),
 }
 SCHEMA_VERSION = 1
 HERE = Path(__file__).resolve().parent

@@ -20,6 +20,7 @@ from clone.cli.demo import demo_command
 from clone.cli.pose import pose_app
 from clone.cli.report import report_command
 from clone.cli.retarget import retarget_app
+from clone.cli.search import search_app
 from clone.cli.synth import synth_app
 from clone.cli.world import world_app
 
@@ -59,6 +60,7 @@ app.add_typer(pose_app, name="pose")
 app.add_typer(retarget_app, name="retarget")
 app.add_typer(world_app, name="world")
 app.add_typer(synth_app, name="synth")
+app.add_typer(search_app, name="search")
 
 
 def main() -> None:

@@ -1,0 +1,157 @@
+"""`clone search`: find a motion in a collection of pose tracks, whoever performs it, from whichever side.
+
+torch and the pose readers are imported inside the commands so that `clone --help` stays fast.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
+
+search_app = typer.Typer(
+    help="Motion retrieval: index pose tracks by their motion codes, then find a query's motion in them.",
+    no_args_is_help=True,
+)
+
+_WEIGHTS_HELP = "clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped); the index remembers which."
+_SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
+_THREADS_HELP = "CPU threads (default: the free cores)."
+
+
+@search_app.command("index")
+@user_errors
+def index(
+    tracks: Annotated[
+        list[Path],
+        typer.Argument(help="Pose files and folders (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv); other "
+                       "folders are searched recursively."),
+    ],
+    out: Annotated[Path, typer.Option("--out", help="Index file to write (one .npz file, any name).")],
+    weights: Annotated[Path | None, typer.Option("--weights", help=_WEIGHTS_HELP)] = None,
+    size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help=_THREADS_HELP)] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
+) -> None:
+    """Encode the motion of every track once and write the index to --out."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from pose_io.atomic import check_new_output
+    from pose_io.readers import parse_size, read_track
+    from retarget.api import load_retargeter
+    from retarget.search import MotionCodeEncoder, build_index, save_index
+
+    check_new_output(out, overwrite)
+    image_size = parse_size(size) if size else None
+    dev = resolve_device_option(device, threads)
+    encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
+    with Progress(TextColumn("indexing"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                  console=console, transient=True) as bar:  # fmt: skip
+        task = bar.add_task("indexing", total=None)
+        built, skipped = build_index(
+            tracks, encoder, read=lambda p: read_track(p, image_size=image_size),
+            progress=lambda done, total, _: bar.update(task, completed=done, total=total),
+        )
+    save_index(built, out, overwrite=overwrite)
+    if skipped:
+        console.print(f"skipped {len(skipped)} unreadable file(s), first: {skipped[0].reason}", highlight=False)
+    typer.echo(f"wrote {out} ({built.num_tracks} tracks, {built.num_frames:,} frames)")
+
+
+@search_app.command("query")
+@user_errors
+def query(
+    query_poses: Annotated[Path, typer.Argument(help="The query's poses (any format `clone pose info` reads).")],
+    index_path: Annotated[Path, typer.Option("--index", help="Index written by `clone search index`.")],
+    top: Annotated[int, typer.Option("--top", min=1, help="Hits to show.")] = 10,
+    per_track: Annotated[int, typer.Option("--per-track", min=1, help="Most hits from one track.")] = 1,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the hits as JSON instead of a table.")] = False,
+    weights: Annotated[Path | None, typer.Option("--weights", help="The weights the index was built with.")] = None,
+    size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help=_THREADS_HELP)] = None,
+) -> None:
+    """The indexed tracks that hold QUERY_POSES' motion, best first: frames start..end-1 of each, and the score
+    (cosine similarity of the motion codes, 1 = the same codes)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from pose_io.readers import parse_size, read_track
+    from retarget.api import load_retargeter
+    from retarget.search import MotionCodeEncoder, load_index, search
+
+    image_size = parse_size(size) if size else None
+    loaded = load_index(index_path)
+    track = read_track(query_poses, image_size=image_size)
+    dev = resolve_device_option(device, threads)
+    encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
+    hits = search(loaded, encoder, track, top_k=top, per_track=per_track, name=str(query_poses))
+    if as_json:
+        doc = {"query": str(query_poses), "frames": len(track), "index": str(index_path),
+               "hits": [h.to_dict() for h in hits]}  # fmt: skip
+        typer.echo(json.dumps(doc, indent=1))
+        return
+    if not hits:
+        console.print(f"no indexed track is as long as the query ({len(track)} frames)", highlight=False)
+        return
+    table = Table(title=f"{query_poses}: {len(track)} frames", title_justify="left")
+    table.add_column("rank", justify="right")
+    table.add_column("track", overflow="fold")  # long paths wrap instead of being cut
+    for name in ("start", "end", "score"):
+        table.add_column(name, justify="right")
+    for rank, h in enumerate(hits, 1):
+        table.add_row(str(rank), h.path, str(h.start), str(h.end), f"{h.score:.3f}")
+    Console().print(table)
+
+
+@search_app.command("eval")
+@user_errors
+def evaluate(
+    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")],
+    queries: Annotated[int, typer.Option("--queries", min=1, help="Queries (random test windows).")] = 500,
+    length: Annotated[int, typer.Option("--length", min=16, help="Frames per query.")] = 64,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the index performances and the queries.")] = 0,
+    weights: Annotated[Path | None, typer.Option("--weights", help=_WEIGHTS_HELP)] = None,
+    out: Annotated[Path | None, typer.Option("--out", help="Also write the results as JSON here.")] = None,
+    world_seed: Annotated[
+        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
+    ] = 0,
+    cache: Annotated[
+        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
+    ] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help=_THREADS_HELP)] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
+) -> None:
+    """Retrieval accuracy on the motion world's test split: motion codes against raw joints."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from pose_io.atomic import atomic_file, check_new_output
+    from retarget.api import load_retargeter
+    from retarget.search import MotionCodeEncoder
+    from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table
+    from retarget.world import MotionWorld
+
+    if out is not None:
+        check_new_output(out, overwrite)
+    config = RetrievalEvalConfig(queries=queries, length=length, seed=seed)
+    dev = resolve_device_option(device, threads)
+    encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
+    world = MotionWorld.build(mocap, cache, seed=world_seed)
+    with Progress(TextColumn("queries"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                  console=console, transient=True) as bar:  # fmt: skip
+        task = bar.add_task("queries", total=None)
+        doc = evaluate_retrieval(world.split("test"), encoder, config, fps=world.config.fps,
+                                 progress=lambda done, total: bar.update(task, completed=done, total=total))
+    typer.echo(f"test split: {doc['tracks']} indexed performances of {doc['clips']} clips ({doc['groups']} motions, "
+               f"{doc['frames']:,} frames); {doc['queries']} queries of {length} frames")
+    typer.echo(markdown_table(doc))
+    if out is not None:
+        with atomic_file(out, overwrite=overwrite) as tmp:
+            Path(tmp).write_text(json.dumps(doc, indent=1) + "\n")
+        console.print(f"wrote {out}", highlight=False)

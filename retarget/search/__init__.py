@@ -1,0 +1,46 @@
+"""Motion retrieval (Aberman et al. 2019, Sec. 7): find the same motion in a collection of pose tracks,
+whoever performs it and from whichever side it is filmed.
+
+    encoder = MotionCodeEncoder(load_retargeter())
+    index, skipped = build_index(["tracks/"], encoder)       # every track encoded once
+    save_index(index, "tracks.index")
+    hits = search(load_index("tracks.index"), encoder, query_track, top_k=5)
+
+Modules: :mod:`~retarget.search.features` (motion codes and the raw-joint baseline),
+:mod:`~retarget.search.index` (the index and its file), :mod:`~retarget.search.query` (one-pass normalised
+cross-correlation and the hits), :mod:`~retarget.search.evaluate` (accuracy on the motion world's test split).
+"""
+
+from retarget.search.features import ENCODE_FPS, JointEncoder, MotionCodeEncoder, TrackEncoder, model_digest
+from retarget.search.index import (
+    FORMAT_VERSION,
+    SearchIndex,
+    Skipped,
+    build_index,
+    find_tracks,
+    from_sequences,
+    load_index,
+    save_index,
+)
+from retarget.search.query import Match, check_encoder, correlate, rank, search
+
+__all__ = [
+    "ENCODE_FPS",
+    "FORMAT_VERSION",
+    "JointEncoder",
+    "Match",
+    "MotionCodeEncoder",
+    "SearchIndex",
+    "Skipped",
+    "TrackEncoder",
+    "build_index",
+    "check_encoder",
+    "correlate",
+    "find_tracks",
+    "from_sequences",
+    "load_index",
+    "model_digest",
+    "rank",
+    "save_index",
+    "search",
+]
