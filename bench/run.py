@@ -35,6 +35,7 @@ STAGES: dict[str, tuple[str, bool]] = {
     "drive": ("bench.drive", True),
     "gpu": ("bench.gpu", True),
     "search": ("bench.search", True),
+    "io": ("bench.io", True),
 }
 SCHEMA_VERSION = 1
 HERE = Path(__file__).resolve().parent

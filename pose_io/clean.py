@@ -1,4 +1,4 @@
-"""Opt-in cleaning of pose tracks: filling short gaps, confidence-weighted smoothing, changing fps.
+"""Opt-in cleaning of pose tracks: filling short gaps, smoothing, changing fps, dropping outlier joints.
 
 Nothing here runs unless asked for; every function returns a new track and leaves missing data
 explicit where it cannot honestly be made up.
@@ -13,9 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from pose_io.errors import InputError
+from pose_io.limits import Dropped, check_fps, check_frame_count, outlier_mask
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
+
+#: Output frames resampled at once (bounds the float64 temporaries of long resamplings).
+_RESAMPLE_CHUNK = 65_536
 
 
 @dataclass(frozen=True)
@@ -107,9 +111,29 @@ def fill_gaps(track: PoseTrack, max_gap: int) -> tuple[PoseTrack, GapReport]:
     return track.replace(joints=joints, confidence=conf), report
 
 
-def gaussian_kernel(sigma: float) -> np.ndarray:
-    """[2r+1] Gaussian weights (not normalised), r = ceil(4 sigma)."""
+def drop_outlier_joints(track: PoseTrack) -> tuple[PoseTrack, Dropped]:
+    """``track`` with its outlier joints made missing (rules in :mod:`pose_io.limits`), and what was dropped.
+
+    Readers already do this; it is for tracks made in code. Nothing is logged here: callers say it once.
+
+    Returns:
+        The track (the same object when nothing was dropped) and a :class:`pose_io.limits.Dropped`.
+    """
+    outliers = outlier_mask(track.joints, track.image_size)  # [T, J]
+    if not outliers.any():
+        return track, Dropped(0)
+    t, j = (int(v) for v in np.argwhere(outliers)[0])
+    x, y = (float(v) for v in track.joints[t, j])
+    dropped = Dropped(int(outliers.sum()), t, track.joint_layout.joints[j], x, y)
+    joints = np.where(outliers[..., None], np.nan, track.joints)
+    return track.replace(joints=joints), dropped
+
+
+def gaussian_kernel(sigma: float, max_radius: int | None = None) -> np.ndarray:
+    """[2r+1] Gaussian weights (not normalised), r = ceil(4 sigma), at most ``max_radius`` when given."""
     radius = max(1, math.ceil(4.0 * sigma))
+    if max_radius is not None:
+        radius = max(1, min(radius, max_radius))
     k = np.arange(-radius, radius + 1, dtype=np.float64)
     return np.exp(-0.5 * (k / sigma) ** 2)
 
@@ -132,9 +156,10 @@ def smooth(track: PoseTrack, sigma: float) -> PoseTrack:
         raise InputError(f"smoothing sigma must be >= 0, got {sigma}")
     if sigma == 0:
         return track
-    kernel = gaussian_kernel(sigma)
-    radius = len(kernel) // 2
     t_len = track.num_frames
+    # Offsets of T frames or more never meet the track, so the kernel stops there whatever sigma says.
+    kernel = gaussian_kernel(sigma, max_radius=t_len)
+    radius = len(kernel) // 2
     weight = track.confidence.astype(np.float64)  # [T, J], 0 where missing
     xy = np.nan_to_num(track.joints.astype(np.float64)) * weight[..., None]  # [T, J, 2]
     num = np.zeros_like(xy)
@@ -205,16 +230,28 @@ def resample(track: PoseTrack, fps: float) -> PoseTrack:
 
     Args:
         track: the track.
-        fps: the new frame rate (> 0).
+        fps: the new frame rate (0.01 to 1,000, see :mod:`pose_io.limits`).
 
     Returns:
         The resampled track with ``fps`` set.
+
+    Raises:
+        InputError: an fps out of range, or more than 1,000,000 output frames (checked before allocating).
     """
-    if not (math.isfinite(fps) and fps > 0):
-        raise InputError(f"fps must be positive, got {fps}")
+    fps = check_fps(fps, "resampling fps")
     ratio = track.fps / fps
     n_out = math.floor((track.num_frames - 1) / ratio + 1e-9) + 1
-    src = np.arange(n_out) * ratio  # [N] fractional input frame of each output frame
+    check_frame_count(n_out, f"resampling {track.num_frames} frames from {track.fps:g} to {fps:g} fps")
+    joints = np.empty((n_out, *track.joints.shape[1:]), dtype=np.float32)  # [N, J, 2]
+    conf = np.empty((n_out, track.joints.shape[1]), dtype=np.float32)  # [N, J]
+    for start in range(0, n_out, _RESAMPLE_CHUNK):  # chunks keep the float64 temporaries small
+        stop = min(start + _RESAMPLE_CHUNK, n_out)
+        joints[start:stop], conf[start:stop] = _interpolate(track, np.arange(start, stop) * ratio)
+    return PoseTrack(joints, conf, fps, track.image_size, track.layout)
+
+
+def _interpolate(track: PoseTrack, src: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joints [N, J, 2] and confidence [N, J] at fractional input frames ``src`` [N] (rules of :func:`resample`)."""
     near = np.round(src)
     src = np.where(np.abs(src - near) < 1e-6, near, src)
     lo = np.clip(np.floor(src).astype(np.int64), 0, track.num_frames - 1)
@@ -227,4 +264,4 @@ def resample(track: PoseTrack, fps: float) -> PoseTrack:
     conf = np.where(exact, c_lo, (1 - w) * c_lo + w * c_hi)
     # NaN in either neighbour propagates through the weighted sum, so a half-missing pair stays missing.
     conf = np.where(np.isnan(joints[..., 0]), 0.0, conf)
-    return PoseTrack(joints.astype(np.float32), conf.astype(np.float32), fps, track.image_size, track.layout)
+    return joints.astype(np.float32), conf.astype(np.float32)

@@ -203,12 +203,16 @@ def follow_person(detections: Detections, person: int | None = None, gate: float
         conf[t, vis] = p[vis, 2]
         chosen[t] = i
 
+    if detections.single:  # one person per frame: no choice to make, so all frames at once
+        p = np.stack([detections.people[t][0] for t in with_people])  # [N, J, 3]
+        vis = np.isfinite(p[..., :2]).all(axis=-1) & (p[..., 2] > 0)  # [N, J]
+        joints[with_people] = np.where(vis[..., None], p[..., :2], np.nan)
+        conf[with_people] = np.where(vis, p[..., 2], 0.0)
+        chosen[with_people] = 0
+        return FollowResult(joints, conf, chosen, start, ())
+
     take(start, k)
     lost: list[int] = []
-    if detections.single:
-        for t in with_people[1:]:
-            take(int(t), 0)
-        return FollowResult(joints, conf, chosen, start, ())
 
     if detections.ids is not None:
         identity = detections.ids[start][k]

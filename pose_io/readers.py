@@ -30,19 +30,25 @@ csv header, OpenPose sidecar); otherwise fps is 30 and the image size is inferre
 smallest multiple of 16 pixels in each direction that contains every coordinate. Pass the real size
 (``image_size=`` / ``--size WxH``) when it matters.
 
+Limits (:mod:`pose_io.limits`): values must be finite and within float32 range (beyond it is an error,
+never a silently missing joint), arrays must hold real numbers (complex, text or object arrays are
+errors), image sides are 1 to 16,384 pixels (a given ``--size``, a stored size and the inferred one
+alike), fps 0.01 to 1,000, tracks at most 1,000,000 frames; array headers are checked before any data is
+read. A joint far outside the image and far from its body is an outlier: it is dropped as missing before
+the person is followed and the size inferred, with ONE warning (``logging.warning``) counting the dropped
+joints; ``TrackSummary.outliers`` holds the count.
+
 Multi-person formats are followed with :func:`pose_io.people.follow_person`.
 """
 
 from __future__ import annotations
 
-import csv
-import io
+import dataclasses
 import json
 import logging
 import math
 import os
 import re
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,7 +57,25 @@ import numpy as np
 
 from pose_io.errors import InputError
 from pose_io.layouts import LAYOUTS, get_layout
+from pose_io.limits import (
+    FLOAT32_MAX,
+    MAX_IMAGE_SIDE,
+    Dropped,
+    check_fps,
+    check_image_size,
+    outlier_mask,
+)
 from pose_io.people import DEFAULT_GATE, Detections, follow_person
+from pose_io.read_arrays import read_csv, read_npy, read_npz
+from pose_io.read_common import (
+    LAYOUT_BY_JOINTS,
+    frame_number,
+    frame_range,
+    parse_size,
+    read_bytes,
+    short_error,
+    stack_people,
+)
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
@@ -60,14 +84,15 @@ DEFAULT_FPS = 30.0
 #: Name of the file our OpenPose writer puts next to the frames (fps, image size, layout).
 SIDECAR_NAME = "clone2d_track.json"
 SIDECAR_KIND = "clone2d-openpose-folder"
-#: Frame numbers may skip, but a run this much longer than the number of files is a naming mistake.
-_MAX_SPAN_FACTOR = 100
-_MAX_SPAN_MIN = 100_000
 _SIZE_STEP = 16
 
-LAYOUT_BY_JOINTS: dict[int, str] = {len(layout): name for name, layout in LAYOUTS.items()}
 _KEYPOINTS_RE = re.compile(r"(\d+)_keypoints\.json$")
-_NUMBER_RE = re.compile(r"\d+")
+
+__all__ = [
+    "LAYOUT_BY_JOINTS", "READERS", "SIDECAR_KIND", "SIDECAR_NAME", "TrackSummary", "detect_format",
+    "drop_outliers", "infer_image_size", "parse_size", "read_detections", "read_track", "read_track_summary",
+    "summarize_detections", "track_from_detections",
+]
 
 
 # ----------------------------------------------------------------------------------------------- entry points
@@ -113,6 +138,7 @@ class TrackSummary:
         lost: frames with people in which the followed person was not found.
         fps_source: ``"given"``, ``"file"`` or ``"default"``.
         size_source: ``"given"``, ``"file"``, ``"fallback"`` or ``"inferred"``.
+        outliers: joints dropped as outliers (see :mod:`pose_io.limits`; a warning is logged too).
     """
 
     track: PoseTrack
@@ -122,6 +148,7 @@ class TrackSummary:
     lost: tuple[int, ...]
     fps_source: str
     size_source: str
+    outliers: int = 0
 
 
 def read_track_summary(
@@ -189,26 +216,34 @@ def summarize_detections(
     fallback_size: tuple[int, int] | None = None,
 ) -> TrackSummary:
     """Follow one person through ``detections``; the track plus how it was made (arguments as above)."""
-    followed = follow_person(detections, person=person, gate=gate)
     fps_source, size_source = "given", "given"
     if fps is None:
         fps_source = "file" if detections.fps is not None else "default"
         fps = detections.fps if detections.fps is not None else DEFAULT_FPS
+    fps = check_fps(fps, f"{detections.source}: fps" if fps_source == "file" else "fps")
     if image_size is None:
         size_source = "file"
         image_size = detections.image_size
     if image_size is None and fallback_size is not None:
         size_source = "fallback"
         image_size = fallback_size
+    if image_size is not None:
+        image_size = check_image_size(image_size, f"{detections.source}: image size" if size_source == "file"
+                                      else "image size")
+    detections, dropped = drop_outliers(detections, image_size)
+    if dropped.count:
+        log.warning("%s", dropped.message(detections.source))
     if image_size is None:
         size_source = "inferred"
         image_size = infer_image_size(detections)
         log.info("%s: no image size stored; using %dx%d from the data", detections.source, *image_size)
+    followed = follow_person(detections, person=person, gate=gate)
     try:
         track = PoseTrack(followed.joints, followed.confidence, fps, image_size, detections.layout)
     except InputError as exc:
         raise InputError(f"{detections.source}: {exc}") from None
-    return TrackSummary(track, fmt, detections.counts, followed.start, followed.lost, fps_source, size_source)
+    return TrackSummary(track, fmt, detections.counts, followed.start, followed.lost, fps_source, size_source,
+                        dropped.count)
 
 
 def detect_format(path: Path) -> str:
@@ -230,47 +265,82 @@ def detect_format(path: Path) -> str:
 
 
 def infer_image_size(detections: Detections) -> tuple[int, int]:
-    """(width, height): the smallest multiples of 16 containing every visible coordinate of ``detections``."""
+    """(width, height): the smallest multiples of 16 containing every visible coordinate of ``detections``.
+
+    Raises:
+        InputError: the joints reach beyond the largest allowed image (16,384 pixels a side).
+    """
     maxima = np.zeros(2)
     for frame in detections.people:
         if len(frame):
             xy = frame[..., :2][frame[..., 2] > 0]
             if len(xy):
                 maxima = np.maximum(maxima, np.nanmax(xy, axis=0))
+    if (maxima + 1 > MAX_IMAGE_SIDE).any():
+        raise InputError(
+            f"{detections.source}: joints reach ({maxima[0]:.6g}, {maxima[1]:.6g}), beyond the largest allowed "
+            f"image ({MAX_IMAGE_SIDE} pixels a side); pass the image size (--size WxH) if the coordinates are pixels"
+        )
     w, h = (max(_SIZE_STEP, math.ceil((float(v) + 1) / _SIZE_STEP) * _SIZE_STEP) for v in maxima)
     return w, h
 
 
-def parse_size(text: str) -> tuple[int, int]:
-    """``"640x480"`` -> (640, 480); InputError for anything else."""
-    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
-    if not m or int(m.group(1)) <= 0 or int(m.group(2)) <= 0:
-        raise InputError(f"image size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480")
-    return int(m.group(1)), int(m.group(2))
+def drop_outliers(detections: Detections, image_size: tuple[int, int] | None) -> tuple[Detections, Dropped]:
+    """``detections`` with outlier joints made missing (rules in :mod:`pose_io.limits`), and what was dropped.
+
+    Args:
+        detections: everybody in a source.
+        image_size: (width, height), or None when it is unknown (to be inferred after this).
+
+    Returns:
+        The detections (the same object when nothing was dropped) and a :class:`pose_io.limits.Dropped`.
+    """
+    counts = detections.counts  # [T]
+    if not counts.any():
+        return detections, Dropped(0)
+    allpeople = np.concatenate([p for p in detections.people if len(p)])  # [N, J, 3]
+    xy = np.where((allpeople[..., 2] > 0)[..., None], allpeople[..., :2], np.nan)
+    outliers = outlier_mask(xy, image_size)  # [N, J]
+    if not outliers.any():
+        return detections, Dropped(0)
+    n, j = (int(v) for v in np.argwhere(outliers)[0])
+    frame_of = np.repeat(np.arange(len(counts)), counts)  # [N]
+    names = get_layout(detections.layout).joints
+    dropped = Dropped(int(outliers.sum()), int(frame_of[n]), names[j], float(xy[n, j, 0]), float(xy[n, j, 1]))
+    allpeople = allpeople.copy()
+    allpeople[outliers] = (np.nan, np.nan, 0.0)
+    keep = (allpeople[..., 2] > 0).any(axis=1)  # [N] a detection left without any joint goes
+    splits = np.cumsum(counts)[:-1]
+    people = tuple(p[k] for p, k in zip(np.split(allpeople, splits), np.split(keep, splits)))
+    ids = None
+    if detections.ids is not None:
+        ids = tuple(i[k] for i, k in zip(detections.ids, np.split(keep, splits)))
+    return dataclasses.replace(detections, people=people, ids=ids), dropped
 
 
 # ----------------------------------------------------------------------------------------------- helpers
 
 
 def _load_json(path: Path) -> object:
+    raw = read_bytes(path)
     try:
-        return json.loads(path.read_bytes().decode("utf-8"), parse_constant=_reject_constant)
+        return json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        raise InputError(f"{path}: not valid JSON ({_short(exc)})") from None
-    except ValueError as exc:  # from _reject_constant
-        raise InputError(f"{path}: {exc}") from None
+        raise InputError(f"{path}: not valid JSON ({short_error(exc)})") from None
+    except ValueError as exc:  # from _reject_constant, or an integer of more than 4,300 digits
+        raise InputError(f"{path}: {short_error(exc)}") from None
 
 
 def _reject_constant(name: str) -> float:
     raise ValueError(f"non-finite number {name}")
 
 
-def _short(exc: Exception) -> str:
-    return str(exc).splitlines()[0][:120] if str(exc) else exc.__class__.__name__
-
-
 def _numbers(values: object, where: str) -> np.ndarray:
-    """A JSON list of numbers as float64; InputError naming ``where`` for anything else."""
+    """A JSON list of numbers as float64; InputError naming ``where`` for anything else.
+
+    Values must be finite and within float32 range (tracks store float32; beyond it they would become
+    infinite).
+    """
     if not isinstance(values, list) or not all(
         isinstance(v, (int, float)) and not isinstance(v, bool) for v in values
     ):
@@ -278,9 +348,12 @@ def _numbers(values: object, where: str) -> np.ndarray:
     try:
         arr = np.array(values, dtype=np.float64)
     except OverflowError:
-        raise InputError(f"{where}: keypoint value out of range") from None
+        raise InputError(f"{where}: keypoint value beyond float32 range") from None
     if not np.isfinite(arr).all():
         raise InputError(f"{where}: non-finite keypoint value")
+    if arr.size and np.abs(arr).max() > FLOAT32_MAX:
+        k = int(np.argmax(np.abs(arr)))
+        raise InputError(f"{where}: keypoint value {arr[k]:.3g} (index {k}) is beyond float32 range")
     return arr
 
 
@@ -299,50 +372,34 @@ def _person(values: np.ndarray, n_joints: int) -> np.ndarray:
     return p
 
 
-def _stack(people: list[np.ndarray], n_joints: int) -> np.ndarray:
-    """Keep detections with a visible joint; [P, J, 3]."""
-    kept = [p for p in people if (p[:, 2] > 0).any()]
-    return np.stack(kept) if kept else np.zeros((0, n_joints, 3), dtype=np.float32)
-
-
-def _frame_range(numbers: list[int], source: Path, what: str) -> tuple[int, int]:
-    """(first, count) of the frame run covering ``numbers``; InputError for an absurd span."""
-    first, last = min(numbers), max(numbers)
-    span = last - first + 1
-    if span > max(_MAX_SPAN_FACTOR * len(numbers), _MAX_SPAN_MIN):
-        raise InputError(f"{source}: {what} numbers run from {first} to {last} with only {len(numbers)} frames")
-    return first, span
-
-
-def _frame_number(name: str) -> int | None:
-    """The last run of digits in a file name's stem (``"frame_0012.jpg"`` -> 12)."""
-    found = _NUMBER_RE.findall(Path(name).stem)
-    return int(found[-1]) if found else None
-
-
 # ----------------------------------------------------------------------------------------------- OpenPose
 
 
 def _read_sidecar(folder: Path) -> dict | None:
     path = folder / SIDECAR_NAME
-    if not path.is_file():
+    if not path.exists():
         return None
     data = _load_json(path)
-    try:
-        assert isinstance(data, dict) and data.get("kind") == SIDECAR_KIND
-        fps = float(data["fps"])
-        w, h = (int(v) for v in data["image_size"])
-        layout = get_layout(str(data["layout"])).name
-        assert math.isfinite(fps) and fps > 0 and w > 0 and h > 0
-    except (AssertionError, KeyError, TypeError, ValueError):
-        raise InputError(f"{path}: malformed clone2d sidecar (needs kind, fps, image_size, layout)") from None
-    return {"fps": fps, "image_size": (w, h), "layout": layout}
+    if not (isinstance(data, dict) and data.get("kind") == SIDECAR_KIND
+            and all(k in data for k in ("fps", "image_size", "layout"))):
+        raise InputError(f"{path}: malformed clone2d sidecar (needs kind, fps, image_size, layout)")
+    layout = data["layout"]
+    if not isinstance(layout, str) or layout not in LAYOUTS:
+        raise InputError(f"{path}: unknown layout {str(layout)[:40]!r}; valid: {', '.join(sorted(LAYOUTS))}")
+    fps = data["fps"]
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)):
+        raise InputError(f"{path}: fps must be a number, got {str(fps)[:40]!r}")
+    return {"fps": check_fps(fps, f"{path}: fps"), "image_size": check_image_size(data["image_size"],
+            f"{path}: image_size"), "layout": layout}
 
 
 def _read_openpose(folder: Path) -> Detections:
     if not folder.is_dir():
         raise InputError(f"{folder}: OpenPose input must be a folder of *_keypoints.json files")
-    entries = sorted(p for p in folder.iterdir() if not p.name.startswith("."))
+    try:
+        entries = sorted(p for p in folder.iterdir() if not p.name.startswith("."))
+    except OSError as exc:
+        raise InputError(f"{folder}: cannot list the folder ({short_error(exc)})") from None
     files = [p for p in entries if p.name.endswith("_keypoints.json")]
     if not files:
         found = ", ".join(p.name for p in entries[:5]) + (", ..." if len(entries) > 5 else "")
@@ -356,7 +413,7 @@ def _read_openpose(folder: Path) -> Detections:
         if n in by_number:
             raise InputError(f"{folder}: two files for frame {n}: {by_number[n].name}, {f.name}")
         by_number[n] = f
-    first, count = _frame_range(list(by_number), folder, "frame")
+    first, count = frame_range(list(by_number), folder, "frame")
     sidecar = _read_sidecar(folder)
     layout = sidecar["layout"] if sidecar else None
     raw: list[list[np.ndarray]] = []
@@ -376,7 +433,7 @@ def _read_openpose(folder: Path) -> Detections:
             if p.size != 3 * n_joints:
                 f = by_number[first + i]
                 raise InputError(f"{f}: {p.size} keypoint values, other frames have {3 * n_joints} ({layout})")
-        frames.append(_stack([_person(p, n_joints) for p in people], n_joints))
+        frames.append(stack_people([_person(p, n_joints) for p in people], n_joints))
     single = sidecar is not None
     if single and max(len(f) for f in frames) > 1:
         log.warning("%s: has a clone2d sidecar but several people per frame; following one person", folder)
@@ -434,7 +491,7 @@ def _read_results(path: Path, alphapose: bool) -> Detections:
             continue
         image_id = entry["image_id"]
         if alphapose:
-            frame = _frame_number(image_id) if isinstance(image_id, str) else None
+            frame = frame_number(image_id, where) if isinstance(image_id, str) else None
             if frame is None:
                 raise InputError(f"{where}: no frame number in image_id {image_id!r}")
         else:
@@ -453,13 +510,13 @@ def _read_results(path: Path, alphapose: bool) -> Detections:
     if layout is None:
         raise InputError(f"{path}: no person detections")
     n_joints = len(get_layout(layout))
-    first, count = _frame_range([e[0] for e in entries], path, "frame")
+    first, count = frame_range([e[0] for e in entries], path, "frame")
     per_frame: list[list[tuple[np.ndarray, object]]] = [[] for _ in range(count)]
     for frame, values, idx in entries:
         p = _person(values, n_joints)
         if (p[:, 2] > 0).any():
             per_frame[frame - first].append((p, idx))
-    people = tuple(_stack([p for p, _ in f], n_joints) for f in per_frame)
+    people = tuple(stack_people([p for p, _ in f], n_joints) for f in per_frame)
     ids = _identities(per_frame, path) if alphapose else None
     return Detections(people=people, layout=layout, ids=ids, source=str(path))
 
@@ -484,182 +541,11 @@ def _identities(per_frame: list[list[tuple[np.ndarray, object]]], path: Path) ->
     return tuple(out)
 
 
-# ----------------------------------------------------------------------------------------------- arrays
-
-
-def _single_person(joints: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, ...]:
-    """[T, J, 2] + [T, J] of one person -> per-frame [P, J, 3] with P = 1 where any joint is visible."""
-    conf = np.where(np.isfinite(joints).all(axis=-1), np.nan_to_num(conf), 0.0)
-    xyc = np.concatenate([joints, conf[..., None]], axis=-1).astype(np.float32)
-    xyc[xyc[..., 2] <= 0] = (np.nan, np.nan, 0.0)
-    return tuple(_stack([f], joints.shape[1]) for f in xyc)
-
-
-def _load_array(path: Path, what: str) -> object:
-    try:
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{path}: cannot read as {what} ({_short(exc)})") from None
-
-
-def _check_array(arr: object, path: Path, name: str, ndim: int) -> np.ndarray:
-    if not isinstance(arr, np.ndarray) or arr.ndim != ndim or not np.issubdtype(arr.dtype, np.number):
-        shape = getattr(arr, "shape", None)
-        raise InputError(f"{path}: {name} must be a {ndim}-D numeric array, got shape {shape}")
-    if np.isinf(arr).any():
-        raise InputError(f"{path}: {name} has infinite values")
-    return arr.astype(np.float32)
-
-
-def _layout_from_joints(n_joints: int, path: Path) -> str:
-    if n_joints not in LAYOUT_BY_JOINTS:
-        valid = ", ".join(f"{j} ({n})" for j, n in sorted(LAYOUT_BY_JOINTS.items()))
-        raise InputError(f"{path}: {n_joints} joints; expected one of {valid}")
-    return LAYOUT_BY_JOINTS[n_joints]
-
-
-def _read_npy(path: Path) -> Detections:
-    arr = _check_array(_load_array(path, "a .npy array"), path, "the array", 3)
-    if arr.shape[2] not in (2, 3) or arr.shape[0] == 0:
-        raise InputError(f"{path}: expected an array [T, J, 2] or [T, J, 3], got shape {arr.shape}")
-    layout = _layout_from_joints(arr.shape[1], path)
-    conf = arr[..., 2] if arr.shape[2] == 3 else np.ones(arr.shape[:2], dtype=np.float32)
-    _check_confidence(conf, path)
-    return Detections(_single_person(arr[..., :2], conf), layout, single=True, source=str(path))
-
-
-def _check_confidence(conf: np.ndarray, path: Path) -> None:
-    c = np.nan_to_num(conf)
-    if (c < 0).any() or (c > 1 + 1e-6).any():
-        raise InputError(f"{path}: confidence outside [0, 1]")
-
-
-def _read_npz(path: Path) -> Detections:
-    archive = _load_array(path, "a .npz archive")
-    if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise InputError(f"{path}: not a .npz archive")
-    with archive:
-        missing = [k for k in ("joints", "confidence") if k not in archive.files]
-        if missing:
-            raise InputError(f"{path}: lacks {', '.join(missing)} (keys: {', '.join(archive.files) or 'none'})")
-        try:
-            joints = _check_array(archive["joints"], path, "joints", 3)
-            conf = _check_array(archive["confidence"], path, "confidence", 2)
-            fps = float(archive["fps"]) if "fps" in archive.files else None
-            size = tuple(int(v) for v in archive["image_size"]) if "image_size" in archive.files else None
-            layout = str(archive["layout"]) if "layout" in archive.files else None
-        except (ValueError, TypeError, OSError, zipfile.BadZipFile) as exc:
-            raise InputError(f"{path}: malformed entry ({_short(exc)})") from None
-    if joints.shape[2] != 2 or joints.shape[0] == 0 or conf.shape != joints.shape[:2]:
-        raise InputError(f"{path}: joints {joints.shape} / confidence {conf.shape}; expected [T, J, 2] / [T, J]")
-    if layout is None:
-        layout = _layout_from_joints(joints.shape[1], path)
-    elif layout not in LAYOUTS or len(LAYOUTS[layout]) != joints.shape[1]:
-        raise InputError(f"{path}: layout {layout!r} does not fit {joints.shape[1]} joints")
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise InputError(f"{path}: fps must be positive, got {fps}")
-    if size is not None and (len(size) != 2 or min(size) <= 0):
-        raise InputError(f"{path}: image_size must be (width, height) > 0, got {size}")
-    _check_confidence(conf, path)
-    return Detections(_single_person(joints, conf), layout, fps=fps, image_size=size, single=True, source=str(path))
-
-
-# ----------------------------------------------------------------------------------------------- CSV
-
-
-def _read_csv(path: Path) -> Detections:
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
-    lines = text.splitlines()
-    meta: dict[str, str] = {}
-    body_start = 0
-    for body_start, line in enumerate(lines):
-        if not line.startswith("#"):
-            break
-        key, sep, value = line[1:].partition(":")
-        if sep:
-            meta[key.strip().lower()] = value.strip()
-    else:
-        body_start = len(lines)
-    rows = [r for r in csv.reader(io.StringIO("\n".join(lines[body_start:]))) if r]
-    if len(rows) < 2:
-        raise InputError(f"{path}: needs a header line and at least one frame row")
-    header = [h.strip() for h in rows[0]]
-    if not header or header[0] != "frame":
-        raise InputError(f"{path}: the first column must be 'frame'")
-    layout = _csv_layout(header[1:], meta.get("layout"), path)
-    lay = get_layout(layout)
-    col = {name: i for i, name in enumerate(header)}
-    frames: dict[int, np.ndarray] = {}
-    for r, row in enumerate(rows[1:], start=2):
-        if len(row) != len(header):
-            raise InputError(f"{path}: row {r} has {len(row)} cells, the header has {len(header)}")
-        try:
-            number = int(row[0])
-            cells = np.array([float(c) if c.strip() else np.nan for c in row], dtype=np.float64)
-        except ValueError:
-            raise InputError(f"{path}: row {r} has a non-numeric cell") from None
-        if number in frames or number < 0:
-            raise InputError(f"{path}: row {r}: frame {number} is negative or repeated")
-        p = np.zeros((len(lay), 3), dtype=np.float64)
-        for j, name in enumerate(lay.joints):
-            p[j, 0], p[j, 1] = cells[col[f"{name}_x"]], cells[col[f"{name}_y"]]
-            p[j, 2] = cells[col[f"{name}_c"]] if f"{name}_c" in col else 1.0
-        if np.isinf(p).any():
-            raise InputError(f"{path}: row {r} has an infinite value")
-        frames[number] = p
-    first, count = _frame_range(list(frames), path, "frame")
-    joints = np.full((count, len(lay), 2), np.nan, dtype=np.float32)
-    conf = np.zeros((count, len(lay)), dtype=np.float32)
-    for number, p in frames.items():
-        joints[number - first] = p[:, :2]
-        conf[number - first] = p[:, 2]
-    _check_confidence(conf, path)
-    fps = _meta_float(meta, "fps", path)
-    size = parse_size(meta["image_size"]) if "image_size" in meta else None
-    return Detections(_single_person(joints, conf), layout, fps=fps, image_size=size, single=True, source=str(path))
-
-
-def _meta_float(meta: dict[str, str], key: str, path: Path) -> float | None:
-    if key not in meta:
-        return None
-    try:
-        value = float(meta[key])
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"{path}: {key} must be a positive number, got {meta[key]!r}")
-    return value
-
-
-def _csv_layout(columns: list[str], declared: str | None, path: Path) -> str:
-    """The layout whose joints the ``<joint>_x/_y[/_c]`` columns name."""
-    names = []
-    for c in columns:
-        stem, _, axis = c.rpartition("_")
-        if axis not in ("x", "y", "c") or not stem:
-            raise InputError(f"{path}: column {c!r} is not <joint>_x, <joint>_y or <joint>_c")
-        names.append(stem)
-    joints = set(names)
-    candidates = [declared] if declared else list(LAYOUTS)
-    for name in candidates:
-        if name not in LAYOUTS:
-            raise InputError(f"{path}: unknown layout {name!r}; valid: {', '.join(sorted(LAYOUTS))}")
-        lay = LAYOUTS[name]
-        if joints == set(lay.joints) and all(f"{j}_x" in columns and f"{j}_y" in columns for j in lay.joints):
-            if len(columns) != len(set(columns)):
-                raise InputError(f"{path}: repeated column")
-            return name
-    raise InputError(f"{path}: columns do not name the joints of {declared or 'any known layout'}")
-
-
 READERS: dict[str, Callable[[Path], Detections]] = {
     "openpose": _read_openpose,
     "coco": lambda p: _read_results(p, alphapose=False),
     "alphapose": lambda p: _read_results(p, alphapose=True),
-    "npz": _read_npz,
-    "npy": _read_npy,
-    "csv": _read_csv,
+    "npz": read_npz,
+    "npy": read_npy,
+    "csv": read_csv,
 }

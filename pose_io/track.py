@@ -9,6 +9,7 @@ import numpy as np
 
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout, convert_arrays, get_layout
+from pose_io.limits import check_coordinate_range, check_fps, check_frame_count, check_image_size, real_array
 
 
 @dataclass(frozen=True, eq=False)
@@ -17,12 +18,14 @@ class PoseTrack:
 
     A joint is missing exactly when its coordinates are NaN; its confidence is then 0. The constructor
     enforces this both ways (a confidence of 0 makes the joint NaN), checks shapes against the layout and
-    makes the arrays read-only, so a track can be shared without copies.
+    makes the arrays read-only, so a track can be shared without copies. It also enforces the limits of
+    :mod:`pose_io.limits`: real, finite coordinates within float32 range and at most 16 image sizes
+    outside the image, image sides up to 16,384 px, 0.01 to 1,000 fps, at most 1,000,000 frames.
 
     Attributes:
         joints: [T, J, 2] float32 pixel coordinates (x right, y down), NaN where missing.
         confidence: [T, J] float32 in [0, 1].
-        fps: frames per second (> 0).
+        fps: frames per second (0.01 to 1,000).
         image_size: (width, height) in pixels of the frame the coordinates refer to.
         layout: name of the joint layout (see ``pose_io.layouts.LAYOUTS``).
     """
@@ -35,19 +38,20 @@ class PoseTrack:
 
     def __post_init__(self) -> None:
         layout = get_layout(self.layout)
-        joints = np.array(self.joints, dtype=np.float32, copy=True)
+        # Real numbers within float32 range before the cast: complex would lose its imaginary part and
+        # 1e39 would become inf silently (limits in pose_io.limits).
+        joints = np.array(real_array(self.joints, "pose track: joints"), dtype=np.float32, copy=True)
         if joints.ndim != 3 or joints.shape[2] != 2:
             raise InputError(f"pose track: joints must be [T, J, 2], got shape {tuple(joints.shape)}")
         t, j, _ = joints.shape
         if t == 0:
             raise InputError("pose track: no frames")
+        check_frame_count(t, "pose track")
         if j != len(layout):
             raise InputError(f"pose track: layout {layout.name} has {len(layout)} joints, data has {j}")
-        conf = np.array(self.confidence, dtype=np.float32, copy=True)
+        conf = np.array(real_array(self.confidence, "pose track: confidence"), dtype=np.float32, copy=True)
         if conf.shape != (t, j):
             raise InputError(f"pose track: confidence must be [{t}, {j}], got {tuple(conf.shape)}")
-        if np.isinf(joints).any():
-            raise InputError("pose track: infinite coordinates")
         conf = np.nan_to_num(conf, nan=0.0)
         if (conf < 0).any() or (conf > 1.0 + 1e-6).any():
             raise InputError("pose track: confidence outside [0, 1]")
@@ -55,16 +59,14 @@ class PoseTrack:
         joints[missing] = np.nan
         conf[missing] = 0.0
         conf = np.clip(conf, 0.0, 1.0)
-        if not (np.isfinite(self.fps) and self.fps > 0):
-            raise InputError(f"pose track: fps must be positive, got {self.fps}")
-        w, h = (int(v) for v in self.image_size)
-        if w <= 0 or h <= 0:
-            raise InputError(f"pose track: image size must be positive, got {self.image_size}")
+        fps = check_fps(self.fps, "pose track: fps")
+        w, h = check_image_size(self.image_size, "pose track: image size")
+        check_coordinate_range(joints, (w, h), "pose track", layout.joints)
         joints.setflags(write=False)
         conf.setflags(write=False)
         object.__setattr__(self, "joints", joints)
         object.__setattr__(self, "confidence", conf)
-        object.__setattr__(self, "fps", float(self.fps))
+        object.__setattr__(self, "fps", fps)
         object.__setattr__(self, "image_size", (w, h))
 
     @property

@@ -11,6 +11,7 @@ import contextlib
 import logging
 import os
 import re
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from types import TracebackType
@@ -22,6 +23,7 @@ import numpy as np
 from pose_io.atomic import atomic_file
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
+from pose_io.limits import MAX_FPS, MIN_FPS, check_fps, check_image_size
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:
@@ -111,8 +113,32 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0][:160] if text else exc.__class__.__name__
 
 
+def _header_size(path: Path) -> tuple[int, int] | None:
+    """(width, height) from an image file's header without decoding it, or None when Pillow cannot tell.
+
+    Raises:
+        InputError: an image so large that Pillow refuses it as a decompression bomb (over ~179M pixels).
+    """
+    try:
+        from PIL import Image
+    except ImportError:  # Pillow comes with matplotlib and scikit-image; without it OpenCV's own cap holds
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # our limit decides, not Pillow's
+            with Image.open(path) as image:
+                return image.size
+    except Image.DecompressionBombError as exc:
+        raise InputError(f"{path}: image too large to decode ({_first_line(exc)})") from None
+    except (OSError, ValueError, SyntaxError, EOFError):  # not an image Pillow knows: OpenCV will say
+        return None
+
+
 def _read_image(path: Path) -> np.ndarray:
-    """One image file as [H, W, 3] uint8 RGB."""
+    """One image file as [H, W, 3] uint8 RGB; its size is checked from the header before decoding."""
+    size = _header_size(path) if path.is_file() else None
+    if size is not None:
+        check_image_size(size, f"{path}: image size")
     data = np.fromfile(path, dtype=np.uint8) if path.is_file() else None
     bgr = cv2.imdecode(data, cv2.IMREAD_COLOR) if data is not None and data.size else None
     if bgr is None:
@@ -136,8 +162,8 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Frames:
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: does not exist")
-    if fps is not None and not fps > 0:
-        raise InputError(f"fps must be positive, got {fps}")
+    if fps is not None:
+        fps = check_fps(fps, "fps")
     if path.is_dir():
         files = image_files(path)
         if not files:
@@ -178,6 +204,11 @@ def _open_video(path: Path, fps: float | None) -> Frames:
     except (OSError, RuntimeError, ValueError) as exc:
         raise InputError(f"{path}: cannot read as a video ({_first_line(exc)})") from None
     try:
+        check_image_size(tuple(meta.get("size") or ()), f"{path}: video size")  # before a frame is decoded
+    except InputError:
+        gen.close()
+        raise
+    try:
         next(gen)  # the first frame must decode
     except StopIteration:
         raise InputError(f"{path}: video has no frames") from None
@@ -187,8 +218,10 @@ def _open_video(path: Path, fps: float | None) -> Frames:
         gen.close()
     size = tuple(int(v) for v in meta["size"])
     stored = float(meta.get("fps") or 0.0)
-    if fps is None and stored <= 0:
-        log.warning("%s: no frame rate stored; assuming %g fps", path, DEFAULT_FPS)
+    if not MIN_FPS <= stored <= MAX_FPS:  # none stored, or a broken time base
+        if fps is None:
+            log.warning("%s: no usable frame rate stored (%g); assuming %g fps", path, stored, DEFAULT_FPS)
+        stored = 0.0
     return Frames(path, "video", fps or (stored if stored > 0 else DEFAULT_FPS), size)  # type: ignore[arg-type]
 
 
@@ -213,10 +246,8 @@ class VideoWriter:
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, overwrite: bool = False, crf: int = 18) -> None:
-        if not fps > 0:
-            raise InputError(f"fps must be positive, got {fps}")
         self.path = Path(path)
-        self.fps = float(fps)
+        self.fps = check_fps(fps, f"{self.path}: fps")
         self.crf = int(crf)
         self.overwrite = overwrite
         self.frames_written = 0
@@ -290,7 +321,7 @@ def render_track_frames(
     Yields:
         [H, W, 3] uint8 RGB frames, one per track frame.
     """
-    w, h = size if size is not None else track.image_size
+    w, h = check_image_size(size, "drawing size") if size is not None else track.image_size
     scale = np.array([w / track.image_size[0], h / track.image_size[1]], dtype=np.float32)
     layout = track.joint_layout
     frames = iter(background) if background is not None else None

@@ -17,6 +17,7 @@ reaches channel groups through :func:`pose_channels` and :func:`velocity_channel
 from __future__ import annotations
 
 import contextlib
+import logging
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -24,11 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from pose_io.clean import hold_fill, smooth_joints
+from pose_io.clean import drop_outlier_joints, hold_fill, smooth_joints
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, get_layout, require_convertible
 from pose_io.measures import foot_points, skeleton_height, skeleton_heights
 from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
 
 LAYOUT = BODY15
 ROOT = "mid_hip"
@@ -39,6 +42,8 @@ LOCAL_INDEX: tuple[int, ...] = tuple(LAYOUT.indices(LOCAL_JOINTS))
 NUM_ROWS = len(LOCAL_JOINTS) + 1  # + the root velocity row
 NUM_CHANNELS = 2 * NUM_ROWS  # 30
 POSE_CHANNELS = 2 * len(LOCAL_JOINTS)  # 28
+# A body shorter than this (pixels) cannot be measured, and scaling it to a canvas would blow noise up.
+_MIN_BODY_HEIGHT = 1.0
 
 
 @dataclass(frozen=True)
@@ -178,11 +183,20 @@ def row_statistics(windows: np.ndarray, min_std: float = 1.0) -> NormStats:
 
 
 def to_body15(track: PoseTrack, name: str = "track") -> PoseTrack:
-    """``track`` in body15; InputError when its layout cannot give all body15 joints."""
+    """``track`` in body15 with outlier joints dropped; InputError when its layout cannot give all body15 joints.
+
+    Every real track enters the network through here, so a joint far outside the image and far from its
+    body (rules in :mod:`pose_io.limits`) never scales or places the body: it is made missing before the
+    layout conversion, with one warning naming ``name``. Tracks read by :mod:`pose_io.readers` have
+    been through the same rule already.
+    """
     try:
         require_convertible(get_layout(track.layout), LAYOUT)
     except InputError as exc:
         raise InputError(f"{name}: {exc}") from None
+    track, dropped = drop_outlier_joints(track)
+    if dropped.count:
+        log.warning("%s", dropped.message(name))
     return track.to_layout(LAYOUT.name)
 
 
@@ -197,7 +211,11 @@ def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig, joints: 
     if config.body_height > 0:
         if joints is None:
             raise ValueError("body-height normalisation needs the joints")
-        return config.body_height / skeleton_height(joints, LAYOUT)
+        height = skeleton_height(joints, LAYOUT)
+        if height < _MIN_BODY_HEIGHT:
+            raise InputError(f"skeleton height: {height:.3g} pixels; a body must be at least {_MIN_BODY_HEIGHT:g} "
+                             "pixel tall to be scaled")
+        return config.body_height / height
     return config.canvas_height / float(image_size[1])
 
 

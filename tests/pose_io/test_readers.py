@@ -3,11 +3,13 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import event, given
 from hypothesis import strategies as st
 
 from pose_io import BODY25, COCO17, COCO18, InputError, read_detections, read_track, read_track_summary
 from pose_io.readers import detect_format, infer_image_size, parse_size
+from tests.pose_io.fuzzing import fast_and_slow
+from tests.pose_io.test_fuzz_tables import assert_sane
 
 
 def person_values(n_joints: int, offset: float = 100.0, conf: float = 0.8, seed: int = 0) -> list[float]:
@@ -62,8 +64,8 @@ def test_shared_examples(shared_dir):
 
 
 def test_image_size_inferred_as_multiple_of_16(tmp_path):
-    values = person_values(25)
-    values[0], values[1] = 700.0, 10.0
+    values = person_values(25, offset=600.0)  # joints in [600, 680)
+    values[0], values[1] = 700.0, 610.0  # the nose sets the width (a joint 8 bodies away would be an outlier)
     write_frame(tmp_path / "p", 0, [values])
     summary = read_track_summary(tmp_path / "p")
     w, h = summary.track.image_size
@@ -127,40 +129,70 @@ _triple = st.tuples(st.floats(-2, 1000) | st.integers(0, 3000), st.floats(-2, 10
                     st.sampled_from([0.0, 0.5, 1.0]) | st.floats(0, 1.2))
 _well_formed = st.sampled_from([15, 17, 18, 25, 33]).flatmap(
     lambda n: st.lists(_triple, min_size=n, max_size=n)).map(lambda ts: [v for t in ts for v in t])
-_keypoints = _well_formed | st.lists(st.floats(-10, 2000) | st.integers(-3, 3000), max_size=80)
+_HOSTILE_VALUES = [1e6, -1e6, 1e30, 1e38, 1e39, 1e308, 10**400, 2e4, -0.5, 1.5]
+
+
+@st.composite
+def _with_hostile_value(draw, values: list) -> list:
+    """A keypoint list with one value replaced by a hostile number (huge, beyond float32, negative)."""
+    values = list(values)
+    if values:
+        values[draw(st.integers(0, len(values) - 1))] = draw(st.sampled_from(_HOSTILE_VALUES))
+    return values
+
+
+_keypoints = (_well_formed | _well_formed.flatmap(_with_hostile_value)
+              | st.lists(st.floats(-10, 2000) | st.integers(-3, 3000), max_size=80))
 _person = st.fixed_dictionaries({"pose_keypoints_2d": _keypoints}) | _json
 _frame = st.fixed_dictionaries({"version": st.just(1.3), "people": st.lists(_person, max_size=3)}) | _json
+_sidecar = st.fixed_dictionaries({
+    "kind": st.sampled_from(["clone2d-openpose-folder", "other"]),
+    "fps": st.sampled_from([30, 25.0, 0, -1, 1e9, 1000, 1001, 10**400, "30", None, True]),
+    "image_size": st.sampled_from([[640, 480], [0, 1], [100000, 100000], [16384, 16384], [640.5, 480], "640x480",
+                                   [1e308, 1], [640], None]),
+    "layout": st.sampled_from(["body25", "coco18", "nope", 5]),
+}) | _json
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(frames=st.lists(st.tuples(st.integers(0, 40), _frame), min_size=1, max_size=5), raw=st.binary(max_size=20))
-def test_openpose_reader_never_crashes(tmp_path_factory, frames, raw):
+def _openpose_case(tmp_path_factory, frames, raw, sidecar):
     folder = tmp_path_factory.mktemp("fuzz")
     for number, frame in frames:
         (folder / f"f_{number}_keypoints.json").write_text(json.dumps(frame))
     if raw:
         (folder / "f_99_keypoints.json").write_bytes(raw)
+    if sidecar is not None:
+        (folder / "clone2d_track.json").write_text(json.dumps(sidecar))
     try:
         track = read_track(folder)
-    except InputError:
+    except InputError as exc:
+        assert "\n" not in str(exc)
         event("InputError")
         return
     event("track")
     assert track.joints.shape[1] in (15, 17, 18, 25, 33)
-    assert np.isnan(track.joints).any(axis=-1).sum() == (track.confidence == 0).sum()
+    assert_sane(track)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(entries=st.lists(st.fixed_dictionaries(
-    {"image_id": st.integers(0, 30) | st.text(max_size=6), "keypoints": _keypoints}) | _json, max_size=6))
-def test_results_reader_never_crashes(tmp_path_factory, entries):
+test_openpose_reader_never_crashes, test_openpose_reader_never_crashes_slow = fast_and_slow(
+    lambda: given(frames=st.lists(st.tuples(st.integers(0, 40), _frame), min_size=1, max_size=5),
+                  raw=st.just(b"") | st.binary(max_size=20), sidecar=st.none() | _sidecar)(_openpose_case), fast=60)
+
+
+def _results_case(tmp_path_factory, entries):
     path = tmp_path_factory.mktemp("fuzz") / "results.json"
     path.write_text(json.dumps(entries))
     try:
-        read_track(path)
+        assert_sane(read_track(path))
         event("track")
-    except InputError:
+    except InputError as exc:
+        assert "\n" not in str(exc)
         event("InputError")
+
+
+test_results_reader_never_crashes, test_results_reader_never_crashes_slow = fast_and_slow(
+    lambda: given(entries=st.lists(st.fixed_dictionaries(
+        {"image_id": st.integers(0, 30) | st.text(max_size=6) | st.just("9" * 5000 + ".jpg"), "keypoints": _keypoints})
+        | _json, max_size=6))(_results_case), fast=40)
 
 
 # ----------------------------------------------------------------------------------------------- COCO / AlphaPose

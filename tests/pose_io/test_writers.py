@@ -87,3 +87,88 @@ def test_unknown_output_types(tmp_path, walking_track):
     with pytest.raises(InputError, match="unknown output pose format"):
         write_track(walking_track, tmp_path / "a", fmt="bvh")
     assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------------------------- linear in length
+
+
+def long_track(frames: int, layout: str = "body15") -> PoseTrack:
+    """``frames`` frames of random joints with some missing, in ``layout``."""
+    from pose_io.layouts import get_layout
+
+    n = len(get_layout(layout))
+    rng = np.random.default_rng(frames)
+    joints = rng.uniform(0, 600, (frames, n, 2)).astype(np.float32)
+    conf = rng.uniform(0.1, 1.0, (frames, n)).astype(np.float32)
+    conf[::7, 3] = 0.0
+    return PoseTrack(joints, conf, 30.0, (640, 480), layout)
+
+
+def count_missing_calls(monkeypatch) -> list[int]:
+    """Count reads of ``PoseTrack.missing`` (it computes a [T, J] mask on every read)."""
+    calls = [0]
+    original = PoseTrack.missing.fget
+
+    def missing(self: PoseTrack) -> np.ndarray:
+        calls[0] += 1
+        return original(self)
+
+    monkeypatch.setattr(PoseTrack, "missing", property(missing))
+    return calls
+
+
+@pytest.mark.parametrize("name", ["poses", "poses.npz", "poses.csv"])
+def test_writers_compute_the_missing_mask_once_not_per_cell(tmp_path, monkeypatch, name):
+    track = long_track(500)
+    calls = count_missing_calls(monkeypatch)
+    write_track(track, tmp_path / name)
+    assert calls[0] <= 1, f"{name}: PoseTrack.missing read {calls[0]} times for {track.num_frames} frames"
+
+
+def test_100k_frame_npz_converts_to_csv(tmp_path, monkeypatch):
+    """The tester's case (`clone pose convert` of 100,000 frames to CSV never finished): linear now.
+
+    The proxy for "linear": the CSV writer reads the [T, J] missing mask a constant number of times; it
+    used to read it once per cell (T * J times, each O(T * J)). Speed itself is measured in bench/io.py.
+    """
+    from typer.testing import CliRunner
+
+    from clone.cli.main import app
+
+    track = long_track(100_000)
+    write_track(track, tmp_path / "long.npz")
+    calls = count_missing_calls(monkeypatch)
+    result = CliRunner().invoke(app, ["pose", "convert", str(tmp_path / "long.npz"), str(tmp_path / "long.csv")])
+    assert result.exit_code == 0, result.output
+    assert calls[0] <= 3, calls[0]
+    monkeypatch.undo()
+    assert read_track(tmp_path / "long.csv").equals(track)
+
+
+def _profiled_calls(fn) -> int:
+    """Python and C function calls made by ``fn()``: a deterministic measure of work."""
+    import sys
+
+    count = [0]
+
+    def profiler(frame, event, arg):
+        if event in ("call", "c_call"):
+            count[0] += 1
+
+    sys.setprofile(profiler)
+    try:
+        fn()
+    finally:
+        sys.setprofile(None)
+    return count[0]
+
+
+@pytest.mark.parametrize("name, small", [("poses.csv", 1_000), ("poses.npz", 1_000), ("poses", 100)])
+def test_write_and_read_work_grows_linearly(tmp_path, name, small):
+    """Ten times the frames costs at most ~ten times the calls (a per-frame scan of the track would be ~100x)."""
+    calls = []
+    for frames in (small, 10 * small):
+        track = long_track(frames)
+        path = tmp_path / f"{frames}" / name
+        calls.append(_profiled_calls(lambda track=track, path=path: read_track(write_track(track, path))))
+    assert calls[1] <= 12 * calls[0], calls

@@ -1,3 +1,5 @@
+import logging
+
 import numpy as np
 import pytest
 import torch
@@ -14,12 +16,15 @@ from retarget.preprocess import (
     Placement,
     PreprocessConfig,
     channels_to_joints,
+    filled_body15,
     joints_to_channels,
     place,
     placement_of,
     pose_channels,
     prepare_track,
     row_statistics,
+    to_body15,
+    track_scale,
     velocity_channels,
 )
 
@@ -118,6 +123,31 @@ def test_prepare_track_rejects_a_layout_without_body15_joints(monkeypatch):
     track = PoseTrack(np.ones((3, 2, 2)), np.ones((3, 2)), 30, (64, 64), "tiny2")
     with pytest.raises(InputError, match="ref.json: layout tiny2 cannot give body15 joints"):
         prepare_track(track, PreprocessConfig(), "ref.json")
+
+
+def test_outlier_joint_never_reaches_the_network(walking_track, caplog):
+    """A wrist far outside the image and the body (a track made in code) is dropped, with one warning."""
+    wrist = walking_track.joint_layout.index("r_wrist")
+    joints = walking_track.joints.copy()
+    joints[5, wrist] = (9000.0, 100.0)  # 13 image widths out: the constructor allows it, the body rule does not
+    track = walking_track.replace(joints=joints)
+    with caplog.at_level(logging.WARNING, logger="retarget.preprocess"):
+        body = to_body15(track, "driver.npz")
+    records = [r.getMessage() for r in caplog.records if r.name == "retarget.preprocess"]
+    assert len(records) == 1 and records[0].startswith("driver.npz: dropped 1 outlier joint")
+    assert body.missing[5, LAYOUT.index("r_wrist")] and body.missing.sum() == 1
+    filled = filled_body15(track)
+    assert filled[..., 0].max() < 640  # held from frame 4 instead
+    cfg = PreprocessConfig(body_height=300.0)
+    assert track_scale(track, cfg) == pytest.approx(track_scale(walking_track, cfg))
+    np.testing.assert_allclose(prepare_track(track, PreprocessConfig())[:5],
+                               prepare_track(walking_track, PreprocessConfig())[:5], atol=20)
+
+
+def test_a_body_too_small_to_measure_cannot_be_scaled(walking_track):
+    tiny = walking_track.replace(joints=walking_track.joints * 1e-4)
+    with pytest.raises(InputError, match="tiny.npz: skeleton height: .* at least 1 pixel tall"):
+        track_scale(tiny, PreprocessConfig(body_height=300.0), "tiny.npz")
 
 
 @pytest.mark.parametrize("clip", CLIPS)

@@ -7,6 +7,7 @@ a skeleton is read by ``asf_amc``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -117,14 +118,25 @@ def _angles_in_degrees(units: list[str]) -> bool:
     return in_degrees
 
 
+def _vector3(values: list[str]) -> np.ndarray:
+    """Three finite numbers from the start of ``values``; ValueError otherwise (the callers name the line)."""
+    v = np.array([float(x) for x in values[:3]])
+    if v.shape != (3,) or not np.isfinite(v).all():
+        raise ValueError("expected three finite numbers")
+    return v
+
+
 def _parse_root(lines: list[str], src: str) -> AsfRoot:
     try:
         info = {ln.split()[0].lower(): ln.split()[1:] for ln in lines}
+        order = [s.upper() for s in info["order"]]
+        if not all(len(c) == 2 and c[0] in "TR" and c[1] in "XYZ" for c in order):
+            raise ValueError("root order must name TX..RZ channels")
         return AsfRoot(
-            order=[s.upper() for s in info["order"]],
+            order=order,
             axis=info.get("axis", ["XYZ"])[0].upper(),
-            orientation=[float(v) for v in info.get("orientation", ["0", "0", "0"])],
-            position=np.array([float(v) for v in info.get("position", ["0", "0", "0"])]),
+            orientation=list(_vector3(info.get("orientation", ["0", "0", "0"]))),
+            position=_vector3(info.get("position", ["0", "0", "0"])),
         )
     except (KeyError, IndexError, ValueError):
         raise InputError(f"{src}: broken :root section") from None
@@ -150,11 +162,13 @@ def _parse_bones(lines: list[str], src: str) -> dict[str, AsfBone]:
             elif key == "name":
                 cur.name = parts[1]
             elif key == "direction":
-                cur.direction = np.array([float(v) for v in parts[1:4]])
+                cur.direction = _vector3(parts[1:4])
             elif key == "length":
                 cur.length = float(parts[1])
+                if not math.isfinite(cur.length):
+                    raise ValueError
             elif key == "axis":
-                cur.axis = np.array([float(v) for v in parts[1:4]])
+                cur.axis = _vector3(parts[1:4])
                 cur.axis_order = parts[4].upper() if len(parts) > 4 else "XYZ"
             elif key == "dof":
                 cur.dof = [p.lower() for p in parts[1:]]

@@ -7,6 +7,7 @@ a bone starts where its parent ends.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -98,9 +99,12 @@ def _read_amc_frames(path: str | Path) -> list[_Frame]:
         if not frames:
             raise InputError(f"{src}: not an AMC motion (data before the first frame number)")
         try:
-            frames[-1][parts[0]] = [float(v) for v in parts[1:]]
+            values = [float(v) for v in parts[1:]]
         except ValueError:
             raise InputError(f"{src}: non-numeric value in line {line[:40]!r}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise InputError(f"{src}: non-finite value in line {line[:40]!r}")
+        frames[-1][parts[0]] = values
     if not frames:
         raise InputError(f"{src}: AMC motion has no frames")
     if not frames[-1]:
@@ -177,6 +181,8 @@ def read_asf_amc(asf_path: str | Path, amc_path: str | Path, fps: float = 120.0)
         InputError: missing or malformed files, or an AMC naming bones the ASF lacks.
     """
     asf_src, amc_src = str(asf_path), str(amc_path)
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"{amc_src}: fps must be a positive number, got {fps}")
     skel = read_asf(asf_path)
     frames = _read_amc_frames(amc_path)
     unknown = sorted({k for f in frames for k in f if k != "root" and k not in skel.bones})

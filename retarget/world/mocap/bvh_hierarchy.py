@@ -14,6 +14,9 @@ from pose_io.errors import InputError
 
 # A channel name: axis letter then kind, e.g. "Zrotation" or "Xposition" (any case).
 CHANNEL_RE = re.compile(r"^([XYZ])(position|rotation)$", re.IGNORECASE)
+# Real rigs nest a few dozen joints deep; the parser recurses once per level, so a hostile file nesting
+# thousands would hit Python's recursion limit instead of a clear error.
+MAX_DEPTH = 256
 
 
 class _Tokens:
@@ -95,8 +98,10 @@ def _channels(toks: _Tokens) -> tuple[str, ...]:
     return chans
 
 
-def _joint(toks: _Tokens, out: _Joints, parent: int, name: str, end_site: bool) -> None:
+def _joint(toks: _Tokens, out: _Joints, parent: int, name: str, end_site: bool, depth: int = 0) -> None:
     """Read one ``{ ... }`` block and, recursively, its children into ``out``."""
+    if depth > MAX_DEPTH:
+        raise toks.fail(f"joints nested deeper than {MAX_DEPTH} levels")
     me = len(out.names)
     out.names.append(name)
     out.parents.append(parent)
@@ -113,10 +118,10 @@ def _joint(toks: _Tokens, out: _Joints, parent: int, name: str, end_site: bool) 
         elif key == "CHANNELS" and not end_site:
             out.channels[me] = _channels(toks)
         elif key == "JOINT" and not end_site:
-            _joint(toks, out, me, toks.name(), False)
+            _joint(toks, out, me, toks.name(), False, depth + 1)
         elif key == "END" and not end_site:
             toks.expect("Site")
-            _joint(toks, out, me, f"{name}_End", True)
+            _joint(toks, out, me, f"{name}_End", True, depth + 1)
         else:
             raise toks.fail(f"unexpected {tok!r} in joint {name!r}")
 

@@ -18,7 +18,7 @@ def read_text(path: str | Path) -> str:
         The decoded text: UTF-8, or Latin-1 when it is not valid UTF-8 (older exporters).
 
     Raises:
-        InputError: missing file, a folder, or broken gzip data.
+        InputError: missing or unreadable file, a folder, or broken gzip data.
     """
     path = Path(path)
     try:
@@ -27,6 +27,8 @@ def read_text(path: str | Path) -> str:
         raise InputError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise InputError(f"{path}: is a folder, not a file") from None
+    except OSError as exc:  # permissions, a FIFO, an I/O error
+        raise InputError(f"{path}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
     if raw[:2] == b"\x1f\x8b":
         try:
             raw = gzip.decompress(raw)
