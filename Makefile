@@ -5,12 +5,14 @@ STAMP := $(VENV)/.clone2d-installed
 
 .PHONY: demo test test-all bench browser-test lint clean
 
+# The optional `extract` extra: the few packages mediapipe really needs first, then mediapipe itself last, with
+# --no-deps (its own pins pull jax and a second OpenCV) and --no-warn-conflicts (else pip's resolver prints a red
+# error line about exactly those skipped pins on every fresh install).
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --disable-pip-version-check -e ".[dev]"
-	# The optional `extract` extra: mediapipe without its pins, plus the few packages it really needs.
-	$(PY) -m pip install -q --disable-pip-version-check --no-deps mediapipe==0.10.14
 	$(PY) -m pip install -q --disable-pip-version-check absl-py attrs flatbuffers "protobuf<5"
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-warn-conflicts mediapipe==0.10.14
 	touch $(STAMP)
 
 demo: $(STAMP)

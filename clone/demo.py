@@ -88,14 +88,37 @@ def demo_motions() -> dict[str, object]:
         }
 
 
-def prepare_out(out: Path) -> None:
-    """Make ``out`` ready: a folder a demo made earlier is replaced, anything else is left alone."""
+def check_out(out: Path) -> None:
+    """Raise InputError unless ``out`` is new or a folder an earlier demo made, in a writable place."""
+    from clone.outputs import check_writable_folder
+
+    if out.exists() and not (out / MARKER).is_file():
+        raise InputError(f"{out}: exists and was not made by `clone demo`; choose another --out")
+    check_writable_folder(out.parent, f"--out {out}")
+
+
+def prepare_out(out: Path) -> Path | None:
+    """Make ``out`` ready; an earlier demo's folder is moved aside (returned) and only deleted once the new run
+    has finished (:func:`finish_out`), or put back when it fails."""
+    check_out(out)
+    old = None
     if out.exists():
-        if not (out / MARKER).exists():
-            raise InputError(f"{out}: exists and was not made by `clone demo`; choose another --out")
-        shutil.rmtree(out)
+        old = out.with_name(f".{out.name}.old-{os.getpid()}")
+        os.replace(out, old)
     out.mkdir(parents=True)
     (out / MARKER).write_text("made by clone demo; `clone demo` replaces this folder\n")
+    return old
+
+
+def finish_out(out: Path, old: Path | None, ok: bool) -> None:
+    """Drop the earlier demo (``ok``) or the half-made new one, whose place the earlier demo takes again."""
+    if ok:
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return
+    shutil.rmtree(out, ignore_errors=True)
+    if old is not None:
+        os.replace(old, out)
 
 
 def run_demo(
@@ -117,13 +140,30 @@ def run_demo(
     Returns:
         Where everything went, stage times in seconds, and the report's per-method summary.
     """
+    say = stage or (lambda text: log.info(text))
+    out = Path(out)
+    check_out(out)
+    if weights is not None:  # a bad --weights fails before the earlier demo is touched
+        from retarget.api import load_retargeter
+
+        load_retargeter(weights, device)
+    old = prepare_out(out)
+    ok = False
+    try:
+        result = _run(out, config, device, weights, say)
+        ok = True
+    finally:
+        finish_out(out, old, ok)
+    return result
+
+
+def _run(out: Path, config: DemoConfig, device: str, weights: str | os.PathLike | None,
+         say: StageFn) -> DemoResult:
+    """The demo's stages into the prepared folder ``out``."""
     from clone.report import make_report
     from clone.synth import get_character, save_performance
     from clone.train_ref import TrainConfig, train_reference
 
-    say = stage or (lambda text: log.info(text))
-    out = Path(out)
-    prepare_out(out)
     motions = demo_motions()
     ref_skeleton, ref_look, _ = get_character(config.reference_character)
     drv_skeleton, drv_look, _ = get_character(config.driver_character)

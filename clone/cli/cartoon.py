@@ -52,23 +52,24 @@ def cartoon_command(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
-    from pose_io.atomic import atomic_file, check_new_output
+    from clone.outputs import FOLDER, check_output
+    from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
     from pose_io.video import VideoWriter
-    from pose_io.writers import output_format, write_track
+    from pose_io.writers import write_track
     from retarget.api import load_retargeter
     from retarget.runtime import configure_threads
 
     start = time.perf_counter()
-    if out.suffix.lower() != ".mp4":
-        raise InputError(f"{out}: --out must be an .mp4 video")
+    check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
     report = report if report is not None else out.with_suffix(".json")
-    for path in (out, report, poses):
-        if path is not None:
-            check_new_output(path, overwrite)
+    check_output(report, "--report", suffixes=(".json",), overwrite=overwrite)
     if poses is not None:
-        output_format(poses)  # an unsupported suffix fails before any work
+        check_output(poses, "--poses", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
+    named = [p.absolute() for p in (out, report, poses) if p is not None]
+    if len(set(named)) != len(named):
+        raise InputError("--out, --report and --poses must be different paths")
     spec = load_character(character)
     track = read_track(driver, image_size=parse_size(size) if size else None)
     configure_threads()

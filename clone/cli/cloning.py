@@ -15,9 +15,18 @@ import typer
 
 from clone.cli.choices import Align, CanvasMode, Method
 from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
+from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
 DEFAULT_SIZE = 128
+# Ranges of the options that scale memory, disk or time (checked before any work; the disk is shared).
+# 16 passes default_depth but its discriminator bottoms out at 1x1, where instance norm fails.
+MIN_SIZE, MAX_SIZE = 32, 1024
+MAX_STEPS = 10_000_000
+MAX_MINUTES = 7 * 24 * 60.0
+MAX_BATCH = 4096
+MAX_THREADS = 1024
+MAX_GAP = 100_000
 
 
 @user_errors
@@ -26,7 +35,8 @@ def train_ref(
     frames: Annotated[Path, typer.Argument(help="The reference's frames: a video or a folder of images.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Reference model to write.")] = DEFAULT_MODEL,
     size: Annotated[int | None, typer.Option(
-        "--size", help=f"Canvas size: 128, 256 or 512 (any power of two >= 16). Default {DEFAULT_SIZE}.")] = None,
+        "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from {MIN_SIZE} to {MAX_SIZE}). "
+        f"Default {DEFAULT_SIZE}.")] = None,
     steps: Annotated[int | None, typer.Option(
         "--steps", help="Stop when the model has this many steps in total (default 2000 without --minutes).")] = None,
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
@@ -64,17 +74,24 @@ def train_ref(
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    from clone.networks import default_depth
+    from clone.outputs import check_number, check_output
+    from clone.reference_model import preview_path
     from clone.train_ref import TrainConfig, TrainProgress, train_reference
-    from pose_io.errors import InputError
     from retarget import distributed
     from retarget.runtime import free_cores
 
-    if size is not None:
-        try:
-            default_depth(size)
-        except ValueError as exc:
-            raise InputError(f"--size: {exc}") from None
+    if size is not None and not (MIN_SIZE <= size <= MAX_SIZE and size & (size - 1) == 0):
+        raise InputError(f"--size: must be a power of two from {MIN_SIZE} to {MAX_SIZE}, got {size}")
+    check_number("--steps", steps, 1, MAX_STEPS)
+    check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
+    check_number("--batch-size", batch_size, 1, MAX_BATCH)
+    check_number("--threads", threads, 1, MAX_THREADS)
+    # Every output is checked before the frames are read: the model, and the preview written beside it.
+    check_output(out, "--out", overwrite=overwrite, replaceable=resume)
+    check_output(preview_path(out), "--out (its preview)", suffixes=(".png",), overwrite=overwrite or resume)
+    for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights)):
+        if path is not None and not path.exists():
+            raise InputError(f"{name} {path}: no such file or folder")
     try:
         launch = distributed.from_environment()
     except ValueError as exc:
@@ -153,7 +170,15 @@ def drive(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from clone.drive import drive as run_drive
+    from clone.outputs import FOLDER, check_number, check_output
 
+    check_number("--threads", threads, 1, MAX_THREADS)
+    check_number("--max-gap", max_gap, 0, MAX_GAP)
+    check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
+    if poses_out is not None:
+        check_output(poses_out, "--poses-out", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
+        if poses_out.absolute() == out.absolute():
+            raise InputError(f"--poses-out {poses_out}: the same path as --out")
     dev = resolve_device_option(device, threads)
     with Progress(TextColumn("[bold]drive"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                   console=console, transient=True) as bar:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import math
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -31,6 +32,7 @@ def user_errors(func: F) -> F:
     @functools.wraps(func)
     def wrapper(*args: object, **kwargs: object) -> object:
         try:
+            _check_finite(kwargs)
             return func(*args, **kwargs)
         except (InputError, FileNotFoundError, NotADirectoryError, IsADirectoryError) as exc:
             message = str(exc) or exc.__class__.__name__
@@ -40,6 +42,13 @@ def user_errors(func: F) -> F:
             raise typer.Exit(code=2) from None
 
     return wrapper  # type: ignore[return-value]
+
+
+def _check_finite(options: dict[str, object]) -> None:
+    """Every float option must be a number: typer's ``min=``/``max=`` let ``nan`` through (it compares False)."""
+    for name, value in options.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            raise InputError(f"--{name.replace('_', '-')}: must be a finite number, got {value}")
 
 
 class OneLineErrorGroup(TyperGroup):

@@ -28,9 +28,14 @@ def demo_command(
     import dataclasses
     import time
 
-    from clone.demo import QUICK, DemoConfig, run_demo
+    from clone.demo import QUICK, DemoConfig, check_out, run_demo
+    from clone.outputs import check_number
     from retarget.runtime import configure_threads, resolve_device
 
+    check_number("--minutes", minutes, 0.1, 7 * 24 * 60.0)
+    check_out(out)
+    if weights is not None and not weights.is_file():
+        raise typer.BadParameter(f"{weights}: no such file", param_hint="--weights")
     try:
         torch_device = resolve_device(device)
     except ValueError as exc:

@@ -63,5 +63,38 @@ app.add_typer(synth_app, name="synth")
 app.add_typer(search_app, name="search")
 
 
+def _terminate(signum: int, frame: object) -> None:
+    """SIGTERM ends the command as Ctrl-C does: unwinding, so every atomic writer's ``finally`` removes its temp file.
+
+    The second SIGTERM kills at once (the default action is back).
+    """
+    import signal
+
+    signal.signal(signum, signal.SIG_DFL)
+    raise SystemExit(128 + signum)
+
+
+def _quiet_library_warnings() -> None:
+    """Users see our one-line errors and our own warnings, not the libraries' notes meant for developers."""
+    import warnings
+
+    # torch.load's pickle notice; we load with weights_only=True and say so when a file is foreign.
+    warnings.filterwarnings("ignore", category=FutureWarning, module=r"torch(\.|$)")
+    warnings.filterwarnings("ignore", message=r".*weights_only.*")
+    warnings.filterwarnings("ignore", message=r".*TypedStorage is deprecated.*")
+    # NumPy's "invalid value encountered", "Mean of empty slice", "overflow": bad input ends as one error line.
+    warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"numpy(\.|$)")
+    warnings.filterwarnings("ignore", message=r"(invalid value|divide by zero|overflow) encountered",
+                            category=RuntimeWarning)
+    warnings.filterwarnings("ignore", message=r"(Mean of empty slice|Degrees of freedom <= 0)",
+                            category=RuntimeWarning)
+
+
 def main() -> None:
+    """The `clone` console script."""
+    import signal
+
+    _quiet_library_warnings()
+    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
+        signal.signal(signal.SIGTERM, _terminate)
     app()

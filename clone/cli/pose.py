@@ -25,6 +25,10 @@ pose_app = typer.Typer(
     no_args_is_help=True,
 )
 
+MAX_FPS = 10_000.0  # frame rates beyond are typos (and resampling to them allocates frames by the million)
+MAX_GAP = 100_000
+MAX_SIGMA = 10_000.0
+
 _FORMAT_HELP = "Input format (default: from the path)."
 _PERSON_HELP = "Follow person K of the first frame with people (default: the most prominent one)."
 _SIZE_HELP = "Image size WxH of the input (OpenPose/COCO/AlphaPose JSON store none; default: from the data)."
@@ -34,8 +38,10 @@ _IN_FPS_HELP = "Frame rate of the input (default: the file's, else 30)."
 def _read(poses: Path, fmt: PoseFormat | None, person: int | None, size: str | None,
           in_fps: float | None, frames_size: tuple[int, int] | None = None) -> TrackSummary:
     """Read a track with the common reader options; ``frames_size`` stands in for a size the file lacks."""
+    from clone.outputs import check_number
     from pose_io.readers import parse_size, read_track_summary
 
+    check_number("--in-fps", in_fps, 0, MAX_FPS, low_open=True)
     image_size = parse_size(size) if size else None
     return read_track_summary(poses, fmt.value if fmt is not None else None, person=person, fps=in_fps, image_size=image_size,
                               fallback_size=frames_size)
@@ -120,10 +126,11 @@ def show(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Draw the skeleton over black or over the --frames video/folder into an H.264 mp4."""
-    from pose_io.atomic import check_new_output
+    from clone.outputs import check_number, check_output
     from pose_io.video import read_frames, write_pose_video
 
-    check_new_output(out, overwrite)
+    check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
+    check_number("--in-fps", in_fps, 0, MAX_FPS, low_open=True)
     background = read_frames(frames) if frames is not None else None
     summary = _read(poses, fmt, person, size, in_fps, frames_size=background.size if background else None)
     track = summary.track
@@ -160,11 +167,17 @@ def convert(
 
     Steps run in this order: fill gaps, smooth, resample, change layout (so derived joints like the neck profit).
     """
+    from clone.outputs import FOLDER, check_number, check_output
     from pose_io import clean
-    from pose_io.atomic import check_new_output
     from pose_io.writers import write_track
 
-    check_new_output(dst, overwrite)
+    kinds = {"openpose": (FOLDER,), "npz": (".npz",), "csv": (".csv",)}
+    suffixes = kinds.get(to.value, None) if to is not None else (FOLDER, ".npz", ".csv")
+    check_output(dst, "OUT", suffixes=suffixes, overwrite=overwrite)
+    check_number("--fill-gaps", fill_gaps, 0, MAX_GAP)
+    check_number("--smooth", smooth, 0, MAX_SIGMA)
+    check_number("--fps", fps, 0, MAX_FPS, low_open=True)
+    check_number("--in-fps", in_fps, 0, MAX_FPS, low_open=True)
     track = _read(src, fmt, person, size, in_fps).track
     if fill_gaps is not None:
         track, report = clean.fill_gaps(track, fill_gaps)
@@ -191,10 +204,13 @@ def extract(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Extract poses with MediaPipe Pose (model complexity 1, tracking mode, every frame)."""
-    from pose_io.atomic import check_new_output
-    from pose_io.extract import ExtractConfig, extract_video
+    from clone.outputs import FOLDER, check_output
+    from pose_io.errors import InputError
 
-    check_new_output(out, overwrite)
+    check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    if not video.exists():
+        raise InputError(f"{video}: no such video or image folder")
+    from pose_io.extract import ExtractConfig, extract_video  # MediaPipe: only once the arguments are good
     with _progress("extracting") as update:
         result = extract_video(video, out, overwrite=overwrite, config=ExtractConfig(min_visibility=min_visibility),
                                progress=update)

@@ -46,10 +46,16 @@ def report_command(
     from rich.table import Table
 
     from clone.metrics import METRICS
+    from clone.outputs import FOLDER, check_output
     from clone.report import REPORT_METHODS, make_report
     from pose_io.errors import InputError
     from retarget.runtime import configure_threads, resolve_device
 
+    check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    for name, path in (("DRIVE_POSES", drive_poses), ("--model", model), ("--gt-poses", gt_poses),
+                       ("--gt-frames", gt_frames), ("--weights", weights)):
+        if path is not None and not path.exists():
+            raise InputError(f"{name} {path}: no such file or folder")
     try:
         dev = str(resolve_device(device))
     except ValueError as exc:

@@ -18,6 +18,15 @@ retarget_app = typer.Typer(
     no_args_is_help=True,
 )
 
+# Ranges of options that scale time or memory, checked before any work.
+MAX_MINUTES = 7 * 24 * 60.0
+MAX_EPOCHS = 1_000_000
+MAX_BATCH = 65_536
+MAX_WORKERS = 256
+MAX_THREADS = 1024
+MAX_PAIRS = 1_000_000
+MAX_LENGTH = 100_000
+
 _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
 
 
@@ -42,17 +51,20 @@ def apply(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
-    from pose_io.atomic import check_new_output
+    from clone.outputs import FOLDER, check_output
+    from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
     from pose_io.video import write_pose_video
-    from pose_io.writers import output_format, write_track
+    from pose_io.writers import write_track
     from retarget.api import load_retargeter
     from retarget.runtime import configure_threads
 
-    check_new_output(out, overwrite)
-    output_format(out)  # an unsupported suffix fails before any work
+    # Both outputs are checked before any work: a bad --preview must not fail after --out is written.
+    check_output(out, "--out", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
     if preview is not None:
-        check_new_output(preview, overwrite)
+        check_output(preview, "--preview", suffixes=(".mp4",), overwrite=overwrite)
+        if preview.absolute() == out.absolute():
+            raise InputError(f"--preview {preview}: the same path as --out")
     image_size = parse_size(size) if size else None
     motion = read_track(motion_poses, image_size=image_size)
     reference = read_track(skeleton, image_size=image_size)
@@ -130,6 +142,7 @@ def train(
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from clone.outputs import check_number, check_output
     from pose_io.errors import InputError
     from retarget import distributed
     from retarget.losses import ablation_config
@@ -137,6 +150,16 @@ def train(
     from retarget.train import TrainConfig, TrainProgress
     from retarget.train import train as run_training
 
+    check_output(out, "--out", overwrite=True)  # rewritten after every epoch; --resume continues it
+    if out.exists() and not resume:
+        raise InputError(f"--out {out}: already exists; pass --resume to continue it or choose another --out")
+    check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
+    check_number("--epochs", epochs, 1, MAX_EPOCHS)
+    check_number("--batch-size", batch_size, 1, MAX_BATCH)
+    check_number("--workers", workers, 0, MAX_WORKERS)
+    check_number("--threads", threads, 1, MAX_THREADS)
+    if not mocap.is_dir():
+        raise InputError(f"--mocap {mocap}: no such folder")
     try:
         loss = dataclasses.replace(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
@@ -152,6 +175,7 @@ def train(
     with distributed.launched(dev) as dev, Progress(
         TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
         TextColumn("{task.fields[losses]}"), console=console, disable=not distributed.current().is_main,
+        transient=True,  # an error ends as its one line; the summary below says where the run ended
     ) as bar:
         task = bar.add_task("epoch 1", total=None, losses="")
 
@@ -211,13 +235,18 @@ def evaluate(
     """Retargeting error of our network vs baselines on unseen motions and characters, and code silhouettes."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from pose_io.atomic import check_new_output
+    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.errors import InputError
     from retarget.evaluate import EvalConfig, run_eval
     from retarget.runtime import configure_threads
     from retarget.world import MotionWorld
 
-    check_new_output(out, overwrite)
+    check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    check_number("--pairs", pairs, 1, MAX_PAIRS)
+    check_number("--length", length, 16, MAX_LENGTH)
+    check_number("--threads", threads, 1, MAX_THREADS)
+    if not mocap.is_dir():
+        raise InputError(f"--mocap {mocap}: no such folder")
     named: dict[str, Path] = {}
     for item in compare or []:
         name, sep, path = item.partition("=")
@@ -276,7 +305,8 @@ def interpolate(
 
     import numpy as np
 
-    from pose_io.atomic import atomic_file, check_new_output
+    from clone.outputs import check_number, check_output
+    from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
     from pose_io.video import VideoWriter
@@ -285,9 +315,8 @@ def interpolate(
     from retarget.runtime import configure_threads
 
     start = time.perf_counter()
-    check_new_output(out, overwrite)
-    if out.suffix.lower() not in (".mp4", ".npz"):
-        raise InputError(f"{out}: --out must end in .mp4 (the grid video) or .npz (the poses)")
+    check_output(out, "--out", suffixes=(".mp4", ".npz"), overwrite=overwrite)
+    check_number("--frames", frames, 8, MAX_LENGTH)
     if canvas not in CANVASES:
         raise InputError(f"--canvas {canvas!r}; valid: {', '.join(CANVASES)}")
     rows, cols = parse_vary(vary)

@@ -41,12 +41,13 @@ def index(
     """Encode the motion of every track once and write the index to --out."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from pose_io.atomic import check_new_output
+    from clone.outputs import check_number, check_output
     from pose_io.readers import parse_size, read_track
     from retarget.api import load_retargeter
     from retarget.search import MotionCodeEncoder, build_index, save_index
 
-    check_new_output(out, overwrite)
+    check_output(out, "--out", overwrite=overwrite)
+    check_number("--threads", threads, 1, 1024)
     image_size = parse_size(size) if size else None
     dev = resolve_device_option(device, threads)
     encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
@@ -81,10 +82,14 @@ def query(
     from rich.console import Console
     from rich.table import Table
 
+    from clone.outputs import check_number
     from pose_io.readers import parse_size, read_track
     from retarget.api import load_retargeter
     from retarget.search import MotionCodeEncoder, load_index, search
 
+    check_number("--top", top, 1, 100_000)
+    check_number("--per-track", per_track, 1, 100_000)
+    check_number("--threads", threads, 1, 1024)
     image_size = parse_size(size) if size else None
     loaded = load_index(index_path)
     track = read_track(query_poses, image_size=image_size)
@@ -131,14 +136,21 @@ def evaluate(
     """Retrieval accuracy on the motion world's test split: motion codes against raw joints."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from pose_io.atomic import atomic_file, check_new_output
+    from clone.outputs import check_number, check_output
+    from pose_io.atomic import atomic_file
+    from pose_io.errors import InputError
     from retarget.api import load_retargeter
     from retarget.search import MotionCodeEncoder
     from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table
     from retarget.world import MotionWorld
 
     if out is not None:
-        check_new_output(out, overwrite)
+        check_output(out, "--out", suffixes=(".json",), overwrite=overwrite)
+    check_number("--queries", queries, 1, 1_000_000)
+    check_number("--length", length, 16, 100_000)
+    check_number("--threads", threads, 1, 1024)
+    if not mocap.is_dir():
+        raise InputError(f"--mocap {mocap}: no such folder")
     config = RetrievalEvalConfig(queries=queries, length=length, seed=seed)
     dev = resolve_device_option(device, threads)
     encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))

@@ -41,15 +41,26 @@ def render_command(
     """Render MOTION performed by a character, framed by the world's framing rule."""
     from rich.progress import Progress
 
+    from clone.outputs import FOLDER, check_number, check_output
     from clone.synth import get_character, save_performance
-    from pose_io.atomic import check_new_output
     from pose_io.errors import InputError
     from retarget.world.rigs import load_motion
 
-    check_new_output(out, overwrite)
-    if size < 16:
-        raise InputError(f"--size must be at least 16 pixels, got {size}")
-    skeleton, look, seed = get_character(character)
+    check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    check_number("--size", size, 16, 4096)
+    check_number("--yaw", yaw, -3600.0, 3600.0)
+    check_number("--pitch", pitch, -89.0, 89.0)
+    check_number("--start", start, 0)
+    check_number("--frames", frames, 1, 1_000_000)
+    check_number("--fps", fps, 0, 1000.0, low_open=True)
+    if not motion.is_file():
+        raise InputError(f"{motion}: no such motion file")
+    try:
+        skeleton, look, seed = get_character(character)
+    except InputError:
+        raise
+    except ValueError as exc:  # a negative seed reaches numpy's SeedSequence
+        raise InputError(f"--character {character!r}: {exc}; give a name or a seed >= 0") from None
     clip = load_motion(motion, fps=fps)
     if not 0 <= start < clip.num_frames:
         raise InputError(f"{motion}: --start {start} is outside its {clip.num_frames} frames at {fps:g} fps")

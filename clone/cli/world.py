@@ -38,8 +38,22 @@ def build(
     """Build (or open from the cache) the motion world and print its summary."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from clone.outputs import check_number, check_writable_folder
+    from pose_io.errors import InputError
     from retarget.world import MotionWorld
 
+    check_number("--fps", fps, 0, 1000.0, low_open=True)
+    for name, value in (("--train-characters", train_characters), ("--val-characters", val_characters),
+                        ("--test-characters", test_characters)):
+        check_number(name, value, 1, 10_000)
+    check_number("--window", window, 2, 100_000)
+    check_number("--stride", stride, 1, 100_000)
+    if not mocap.is_dir():
+        raise InputError(f"--mocap {mocap}: no such folder")
+    if cache is not None:
+        if cache.exists() and not cache.is_dir():
+            raise InputError(f"--cache {cache}: is a file; give a folder")
+        check_writable_folder(cache, f"--cache {cache}")
     started = time.perf_counter()
     with Progress(
         TextColumn("loading mocap"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

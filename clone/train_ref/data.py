@@ -95,6 +95,10 @@ def frame_store(count: int, size: int) -> Iterator[np.ndarray]:
     if nbytes <= _IN_MEMORY_BYTES:
         yield np.zeros((count, size, size, 3), dtype=np.uint8)
         return
+    from clone.outputs import check_free_space
+
+    # A frame cache that does not fit would fill the shared disk and end in SIGBUS half-way through reading.
+    check_free_space(Path(tempfile.gettempdir()), nbytes, f"a frame cache of {count} frames at {size}x{size}")
     with tempfile.TemporaryDirectory(prefix="clone2d-frames-") as tmp:
         log.info("keeping %d frames (%.1f GiB) in a memory-mapped file", count, nbytes / 2**30)
         arr = np.lib.format.open_memmap(os.path.join(tmp, "frames.npy"), mode="w+", dtype=np.uint8,

@@ -178,15 +178,23 @@ def train_reference(
     run.world, run.part = world, part
     start_step = run.trainer.step_count
 
-    # Training needs autograd whatever mode the caller left torch in.
-    with torch.enable_grad(), frame_store(count, reference.canvas.size) as store:
-        data = _read_frames(run, frames, count, usable, store)
-        rows = preview_rows(data.indices)
-        run.started = time.perf_counter()  # --minutes counts training only
-        losses, interrupted = _train_steps(run, data, rows, steps, minutes * 60.0 if minutes is not None else None)
-        if world.is_main:
-            write_png(preview_grid(run.trainer, data, rows), preview_path(out))
-        run.save()
+    # A run that fails (or is terminated) leaves no preview of a model it did not write.
+    preview_before = preview_path(out).exists()
+    try:
+        # Training needs autograd whatever mode the caller left torch in.
+        with torch.enable_grad(), frame_store(count, reference.canvas.size) as store:
+            data = _read_frames(run, frames, count, usable, store)
+            rows = preview_rows(data.indices)
+            run.started = time.perf_counter()  # --minutes counts training only
+            limit_s = minutes * 60.0 if minutes is not None else None
+            losses, interrupted = _train_steps(run, data, rows, steps, limit_s)
+            if world.is_main:
+                write_png(preview_grid(run.trainer, data, rows), preview_path(out))
+            run.save()
+    except BaseException:
+        if world.is_main and not preview_before and not out.exists():
+            preview_path(out).unlink(missing_ok=True)
+        raise
 
     return TrainResult(
         model_path=out, preview_path=preview_path(out), steps=run.trainer.step_count,

@@ -54,7 +54,7 @@ def test_empty_frames_folder_and_missing_poses(reference, tmp_path):
     out = tmp_path / "ref.pt"
     assert "no image files" in one_line_error(CliRunner().invoke(app, train_args(poses, empty, out)))
     _, frames = reference
-    assert "does not exist" in one_line_error(CliRunner().invoke(app, train_args(tmp_path / "nope", frames, out)))
+    assert "no such file or folder" in one_line_error(CliRunner().invoke(app, train_args(tmp_path / "nope", frames, out)))
     assert not out.exists()
 
 
