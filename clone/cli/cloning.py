@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Align, CanvasMode, Method
-from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
+from clone.cli.common import DEVICE_HELP, console, resolve_device_option, training_device, user_errors
 from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
@@ -78,7 +78,6 @@ def train_ref(
     from clone.reference_model import preview_path
     from clone.train_ref import TrainConfig, TrainProgress, train_reference
     from retarget import distributed
-    from retarget.runtime import free_cores
 
     if size is not None and not (MIN_SIZE <= size <= MAX_SIZE and size & (size - 1) == 0):
         raise InputError(f"--size: must be a power of two from {MIN_SIZE} to {MAX_SIZE}, got {size}")
@@ -92,13 +91,7 @@ def train_ref(
     for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights)):
         if path is not None and not path.exists():
             raise InputError(f"{name} {path}: no such file or folder")
-    try:
-        launch = distributed.from_environment()
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
-    if launch is not None and threads is None:  # the processes of one machine share its free cores
-        threads = distributed.cpu_threads(launch, free_cores())
-    dev = resolve_device_option(device, threads)
+    dev = training_device(device, threads)
     if resume:
         # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
         # stored one (e.g. to resume on more processes than the stored batch has samples).

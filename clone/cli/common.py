@@ -94,6 +94,21 @@ def setup_logging(verbose: bool) -> None:
 DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 
 
+def training_device(spec: str, threads: int | None = None):  # -> torch.device
+    """:func:`resolve_device_option` for a trainer that may run under torchrun: the processes of one machine then
+    share its free cores unless ``--threads`` is given. InputError on a malformed torchrun environment."""
+    from retarget import distributed
+    from retarget.runtime import free_cores
+
+    try:
+        launch = distributed.from_environment()
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if launch is not None and threads is None:
+        threads = distributed.cpu_threads(launch, free_cores())
+    return resolve_device_option(spec, threads)
+
+
 def resolve_device_option(spec: str, threads: int | None = None):  # -> torch.device
     """Resolve ``--device`` at the command-line edge (InputError on a bad one); on CPU set torch's threads.
 

@@ -14,8 +14,8 @@ import typer
 
 from clone import __version__
 from clone.cli import cloning
-from clone.cli.common import OneLineErrorGroup, setup_logging
 from clone.cli.cartoon import cartoon_command
+from clone.cli.common import OneLineErrorGroup, setup_logging
 from clone.cli.demo import demo_command
 from clone.cli.pose import pose_app
 from clone.cli.report import report_command

@@ -11,7 +11,7 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Ablation, Split, Variant
-from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
+from clone.cli.common import DEVICE_HELP, console, training_device, user_errors
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -146,7 +146,6 @@ def train(
     from pose_io.errors import InputError
     from retarget import distributed
     from retarget.losses import ablation_config
-    from retarget.runtime import free_cores
     from retarget.train import TrainConfig, TrainProgress
     from retarget.train import train as run_training
 
@@ -166,12 +165,9 @@ def train(
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size)
-        launch = distributed.from_environment()
     except ValueError as exc:
         raise InputError(str(exc)) from None
-    if launch is not None and threads is None:  # the processes of one machine share its free cores
-        threads = distributed.cpu_threads(launch, free_cores())
-    dev = resolve_device_option(device, threads)
+    dev = training_device(device, threads)
     with distributed.launched(dev) as dev, Progress(
         TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
         TextColumn("{task.fields[losses]}"), console=console, disable=not distributed.current().is_main,
