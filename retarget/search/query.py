@@ -200,13 +200,17 @@ def rank(
             break
         lo, hi = int(index.offsets[t]), int(index.offsets[t + 1]) - length + 1
         local = best[lo:hi].clone()
-        for _ in range(per_track):
-            if not math.isfinite(float(local.max())):
-                break
-            hit = max((_refine(index, features, t, lo + s) for s in _peaks(local, refine)), key=lambda h: h[0])
-            found.append(hit)
+        accepted: list[int] = []  # steps of this track's hits
+        while len(accepted) < per_track and math.isfinite(float(local.max())):
+            peaks = _peaks(local, refine)
+            hit = max((_refine(index, features, t, lo + s) for s in peaks), key=lambda h: h[0])
             s = hit[2] - lo
-            local[max(0, s - radius + 1) : s + radius] = -math.inf
+            # Refinement may move a peak a step into the zone of an accepted hit: such a hit is not taken.
+            if all(abs(s - a) >= radius for a in accepted):
+                found.append(hit)
+                accepted.append(s)
+            for centre in {s, *peaks[:1]}:
+                local[max(0, centre - radius + 1) : centre + radius] = -math.inf
     found.sort(key=lambda item: -item[0])
     return [_match(index, t, s, int(phases[p]), seconds, v) for v, t, s, p in found[:top_k]]
 
