@@ -4,37 +4,21 @@ on tiny inputs built in tmp_path, so they cannot rot."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+from tests.examples_support import EXAMPLES, write_people
+from tests.examples_support import run_example as run
+
 FRAMES = 40
-
-
-def run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    env = dict(os.environ)
-    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"  # the venv's `clone`, `python`
-    env["PYTHONPATH"] = os.pathsep.join([str(EXAMPLES.parent), env.get("PYTHONPATH", "")])  # `python -m clone...`
-    result = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=600, check=False)
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    return result
 
 
 @pytest.fixture(scope="module")
 def people(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Two OpenPose folders like the authors' examples (a tall and a small person), built here."""
-    from pose_io.writers import write_track
-    from tests.figures import tall_and_small
-
-    folder = tmp_path_factory.mktemp("people")
-    for name, track in tall_and_small(FRAMES).items():
-        write_track(track, folder / f"{name}_man")
-    return folder
+    return write_people(tmp_path_factory.mktemp("people"), FRAMES)
 
 
 def test_interpolate_example(people, tmp_path):

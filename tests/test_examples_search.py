@@ -3,38 +3,12 @@
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+from tests.examples_support import EXAMPLES, run_example, write_people
+
 FRAMES = 120
 PERIOD = 32  # the tall walker's stride (tests/figures.py): a cut also matches one stride earlier or later
-
-
-def _search_registered() -> bool:
-    from clone.cli.main import app
-
-    return any(group.name == "search" for group in app.registered_groups)
-
-
-def _path_with_clone(tmp_path: Path) -> str:
-    """PATH whose `clone` has the `search` commands: the venv's once registered, until then a stand-in."""
-    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"
-    if _search_registered():
-        return path
-    shim = tmp_path / "bin" / "clone"
-    shim.parent.mkdir()
-    shim.write_text(
-        f"#!{sys.executable}\n"
-        "from clone.cli.main import app\n"
-        "from clone.cli.search import search_app\n"
-        "app.add_typer(search_app, name='search')\n"
-        "app()\n"
-    )
-    shim.chmod(0o755)
-    return f"{shim.parent}{os.pathsep}{path}"
 
 
 def _near(value: int, target: int) -> bool:
@@ -43,17 +17,9 @@ def _near(value: int, target: int) -> bool:
 
 
 def test_search_example(tmp_path):
-    from pose_io.writers import write_track
-    from tests.figures import tall_and_small
-
-    examples = tmp_path / "openpose_examples"
-    for name, track in tall_and_small(FRAMES).items():
-        write_track(track, examples / f"{name}_man")
+    examples = write_people(tmp_path / "openpose_examples", FRAMES)
     out = tmp_path / "out"
-    env = {**os.environ, "PATH": _path_with_clone(tmp_path)}
-    result = subprocess.run(["bash", str(EXAMPLES / "search.sh"), str(examples), str(out), "720x720"], cwd=tmp_path,
-                            env=env, capture_output=True, text=True, timeout=600, check=False)  # fmt: skip
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    result = run_example(["bash", str(EXAMPLES / "search.sh"), str(examples), str(out), "720x720"], tmp_path)
     assert "wrote" in result.stdout and "rank" in result.stdout
     hits = json.loads((out / "hits.json").read_text())["hits"]
     assert len(hits) == 3

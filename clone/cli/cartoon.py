@@ -1,7 +1,6 @@
 """`clone cartoon`: a cartoon character of exaggerated proportions performs a driver's motion (paper Sec. 7).
 
-Heavy libraries are imported inside the command so that `clone --help` stays fast. Until the root app registers
-the command, ``python -m clone.cli.cartoon DRIVER --character ... --out ...`` runs it on its own.
+Heavy libraries are imported inside the command so that `clone --help` stays fast.
 """
 
 from __future__ import annotations
@@ -92,22 +91,3 @@ def cartoon_command(
     written = ", ".join(str(p) for p in (out, report, poses) if p is not None)
     console.print(f"wrote {written} in {document['seconds']:.1f} s")
 
-
-def main(args: list[str] | None = None) -> None:
-    """Run the command on its own (``python -m clone.cli.cartoon DRIVER ...``), as `clone cartoon` runs it.
-
-    The command sits in a group of the root app's class, so usage errors end as the same one line. The group is
-    called "python -m" and the command "clone.cli.cartoon", which makes the usage line read as what was typed.
-    """
-    import sys
-
-    from clone.cli.common import OneLineErrorGroup, setup_logging
-
-    app = typer.Typer(cls=OneLineErrorGroup, add_completion=False, pretty_exceptions_enable=False)
-    app.callback()(lambda: setup_logging(False))
-    app.command("clone.cli.cartoon")(cartoon_command)
-    app(args=["clone.cli.cartoon", *(sys.argv[1:] if args is None else args)], prog_name="python -m")
-
-
-if __name__ == "__main__":
-    main()

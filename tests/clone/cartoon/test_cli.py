@@ -1,23 +1,13 @@
-"""`clone cartoon` through typer's CliRunner, on an app built here (the root app registers it elsewhere)."""
+"""`clone cartoon` through typer's CliRunner."""
 
 import json
 
 import pytest
-import typer
 from typer.testing import CliRunner
 
-from clone.cli.cartoon import cartoon_command
-from clone.cli.common import OneLineErrorGroup
+from clone.cli.main import app
 from pose_io.readers import read_track
 from pose_io.writers import write_track
-
-
-@pytest.fixture(scope="module")
-def app() -> typer.Typer:
-    app = typer.Typer(cls=OneLineErrorGroup)
-    app.callback()(lambda: None)
-    app.command("cartoon")(cartoon_command)
-    return app
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +15,7 @@ def driver_folder(driver, tmp_path_factory):
     return write_track(driver, tmp_path_factory.mktemp("driver") / "walker")
 
 
-def test_writes_the_video_the_report_and_the_poses(app, driver, driver_folder, tmp_path):
+def test_writes_the_video_the_report_and_the_poses(driver, driver_folder, tmp_path):
     out = tmp_path / "toon.mp4"
     result = CliRunner().invoke(app, ["cartoon", str(driver_folder), "--character", "chibi", "--out", str(out),
                                       "--poses", str(tmp_path / "toon.npz"), "--device", "cpu"])
@@ -39,7 +29,7 @@ def test_writes_the_video_the_report_and_the_poses(app, driver, driver_folder, t
     assert len(poses) == len(driver) and poses.layout == "body15" and not poses.missing.any()
 
 
-def test_a_json_character_a_chosen_yaw_and_a_named_report(app, driver_folder, tmp_path):
+def test_a_json_character_a_chosen_yaw_and_a_named_report(driver_folder, tmp_path):
     spec = tmp_path / "giraffe.json"
     spec.write_text(json.dumps({"name": "giraffe", "head": 0.8, "torso": 1.6, "legs": 1.2}))
     out, report = tmp_path / "g.mp4", tmp_path / "measures" / "g.json"
@@ -50,7 +40,7 @@ def test_a_json_character_a_chosen_yaw_and_a_named_report(app, driver_folder, tm
     assert data["character"]["name"] == "giraffe" and data["view"] == "yaw -45"
 
 
-def test_errors_are_one_line(app, driver_folder, tmp_path):
+def test_errors_are_one_line(driver_folder, tmp_path):
     runner = CliRunner()
     base = ["cartoon", str(driver_folder), "--device", "cpu"]
     bad = tmp_path / "bad.json"

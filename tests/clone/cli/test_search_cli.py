@@ -6,33 +6,15 @@ import json
 from pathlib import Path
 
 import pytest
-import typer
 from typer.testing import CliRunner
 
-from clone.cli.common import OneLineErrorGroup
-from clone.cli.search import search_app
+from clone.cli.main import app
 from pose_io.writers import write_track
 from tests.figures import walking_figure
 
 
-def _root() -> typer.Typer:
-    """`clone` itself once `search` is registered there; until then a root group like it holding `search`."""
-    from clone.cli.main import app
-
-    if any(group.name == "search" for group in app.registered_groups):
-        return app
-    root = typer.Typer(cls=OneLineErrorGroup, no_args_is_help=True, pretty_exceptions_enable=False)
-
-    @root.callback()
-    def _callback() -> None:
-        pass
-
-    root.add_typer(search_app, name="search")
-    return root
-
-
 def invoke(*args: str):
-    return CliRunner().invoke(_root(), ["search", *args])
+    return CliRunner().invoke(app, ["search", *args])
 
 
 def one_error_line(result) -> str:
