@@ -30,6 +30,7 @@ from retarget.model import RetargetNet
 from retarget.preprocess import (
     NormStats,
     Placement,
+    PreparedTrack,
     PreprocessConfig,
     body15_track,
     canvas_scale,
@@ -37,9 +38,7 @@ from retarget.preprocess import (
     joints_to_channels,
     place,
     placement_of,
-    prepare_track,
-    to_body15,
-    track_scale,
+    prepare,
 )
 from retarget.runtime import resolve_device
 
@@ -185,14 +184,13 @@ class Retargeter:
         Raises:
             InputError: see :meth:`retarget` for the conditions.
         """
-        x = self._input(track, name)
+        x, prepared = self._prepare(track, name)
         body = self._static_code(x, "body") if self.model.body_encoder is not None else None
         view_code = None
         if self.model.view_encoder is not None:
             view_code = self._static_code(x if view is None else self._input(view, view_name), "view")
-        placement = placement_of(to_body15(track, name).joints, name)
-        scale = track_scale(track, self.preprocess, name)
-        return ReferenceCodes(body, view_code, placement, track.image_size, scale)
+        placement = placement_of(prepared.body15, name)
+        return ReferenceCodes(body, view_code, placement, track.image_size, prepared.scale)
 
     @torch.inference_mode()
     def _static_code(self, x: torch.Tensor, which: str) -> np.ndarray:
@@ -261,13 +259,17 @@ class Retargeter:
 
     def _input(self, track: PoseTrack, name: str) -> torch.Tensor:
         """[1, 30, T] normalised network input of a real track."""
+        return self._prepare(track, name)[0]
+
+    def _prepare(self, track: PoseTrack, name: str) -> tuple[torch.Tensor, PreparedTrack]:
+        """The network input [1, 30, T] of a real track, and the track as prepared for it."""
         if len(track) < self.min_frames:
             raise InputError(
                 f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
             )
-        joints = prepare_track(track, self.preprocess, name)  # [T, 15, 2] canvas
-        x = joints_to_channels(torch.from_numpy(joints)[None], self.stats)  # [1, 30, T]
-        return x.to(self.device, torch.float32)
+        prepared = prepare(track, self.preprocess, name)
+        x = joints_to_channels(torch.from_numpy(prepared.canvas)[None], self.stats)  # [1, 30, T]
+        return x.to(self.device, torch.float32), prepared
 
     @torch.inference_mode()
     def _decode_track(self, x: torch.Tensor, reference: ReferenceCodes) -> torch.Tensor:

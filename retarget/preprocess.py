@@ -232,43 +232,67 @@ def filled_body15(track: PoseTrack, name: str = "track") -> np.ndarray:
     Raises:
         InputError: layout not convertible, no joint detected at all, or a joint never detected.
     """
-    joints = to_body15(track, name).joints.astype(np.float64)
+    return _filled(to_body15(track, name).joints, name)
+
+
+def _filled(joints: np.ndarray, name: str) -> np.ndarray:
+    """[T, 15, 2] body15 pixels with NaN gaps -> filled float64 (see :func:`filled_body15`)."""
+    joints = joints.astype(np.float64)
     seen = ~np.isnan(joints[..., 0])
     if not seen.any():
-        raise InputError(f"{name}: no joints detected in any of its {len(track)} frames")
+        raise InputError(f"{name}: no joints detected in any of its {len(joints)} frames")
     never = [LAYOUT.joints[j] for j in np.flatnonzero(~seen.any(axis=0))]
     if never:
         raise InputError(f"{name}: joints never detected in any frame: {', '.join(never)}")
     return hold_fill(joints)
 
 
-def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> np.ndarray:
+@dataclass(frozen=True, eq=False)
+class PreparedTrack:
+    """A real track as the network takes it, and what placing its result needs.
+
+    Attributes:
+        canvas: [T, 15, 2] float64 clean body15 poses in the network canvas.
+        scale: the factor from the track's pixels to the canvas.
+        body15: [T, 15, 2] body15 joints in the track's own pixels (outliers dropped, gaps NaN).
+    """
+
+    canvas: np.ndarray
+    scale: float
+    body15: np.ndarray
+
+
+def prepare(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> PreparedTrack:
     """A real track as clean body15 poses in the network canvas (the authors' preprocessing).
 
-    Converts to body15, fills gaps (:func:`filled_body15`), smooths over time and scales by
-    ``canvas_height / image_height``.
-
-    Args:
-        track: any layout that can give body15.
-        config: preprocessing settings.
-        name: how error messages call the track.
-
-    Returns:
-        [T, 15, 2] float64 canvas coordinates.
+    Converts to body15 once (dropping outlier joints), fills gaps (:func:`hold_fill`), smooths over time and
+    scales to the canvas (:func:`canvas_scale`: by the skeleton height, or by the image height for the
+    authors' weights).
 
     Raises:
-        InputError: see :func:`filled_body15`.
+        InputError: see :func:`filled_body15`, or a body too small to scale.
     """
-    filled = filled_body15(track, name)
-    return smooth_joints(filled, config.input_sigma) * track_scale(track, config, name)
+    body = to_body15(track, name).joints
+    filled = _filled(body, name)
+    scale = _scale(track.image_size, config, body, name)
+    return PreparedTrack(smooth_joints(filled, config.input_sigma) * scale, scale, body)
+
+
+def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> np.ndarray:
+    """[T, 15, 2] float64 canvas poses of a real track (:func:`prepare`)."""
+    return prepare(track, config, name).canvas
 
 
 def track_scale(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> float:
-    """Factor :func:`prepare_track` scales ``track`` by (its pixels -> the network canvas)."""
+    """Factor :func:`prepare` scales ``track`` by (its pixels -> the network canvas)."""
     if config.body_height <= 0:
         return canvas_scale(track.image_size, config)
+    return _scale(track.image_size, config, to_body15(track, name).joints, name)
+
+
+def _scale(image_size: tuple[int, int], config: PreprocessConfig, body15: np.ndarray, name: str) -> float:
     try:
-        return canvas_scale(track.image_size, config, to_body15(track, name).joints)
+        return canvas_scale(image_size, config, body15)
     except InputError as exc:
         raise InputError(f"{name}: {exc}") from None
 
