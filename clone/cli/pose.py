@@ -16,6 +16,7 @@ from rich.console import Console
 
 from clone.cli.choices import Layout, OutputFormat, PoseFormat
 from clone.cli.common import console, user_errors
+from pose_io.limits import MAX_FPS  # one limit for the library and the options
 
 if TYPE_CHECKING:
     from pose_io.readers import TrackSummary
@@ -25,7 +26,6 @@ pose_app = typer.Typer(
     no_args_is_help=True,
 )
 
-MAX_FPS = 10_000.0  # frame rates beyond are typos (and resampling to them allocates frames by the million)
 MAX_GAP = 100_000
 MAX_SIGMA = 10_000.0
 
