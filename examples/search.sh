@@ -2,7 +2,7 @@
 # Motion retrieval: index pose tracks by their motion codes, then find where a query's motion happens in them.
 #   examples/search.sh [OPENPOSE_EXAMPLES] [OUT] [SIZE]
 # OPENPOSE_EXAMPLES holds the OpenPose folders tall_man and small_man (at least 104 frames each); SIZE is their
-# image size (OpenPose JSON stores none, and the network's input scale follows the image height).
+# image size (OpenPose JSON stores none; the shipped weights do not depend on it, the authors' weights do).
 set -euo pipefail
 EXAMPLES=${1:-../shared/openpose_examples}
 OUT=${2:-out/search}
