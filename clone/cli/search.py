@@ -120,6 +120,12 @@ def evaluate(
     mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")],
     queries: Annotated[int, typer.Option("--queries", min=1, help="Queries (random test windows).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per query.")] = 64,
+    min_view_gap: Annotated[
+        float,
+        typer.Option("--min-view-gap", min=0.0, max=180.0, metavar="DEG",
+                     help="A hit must be another character seen at least this many degrees of yaw from the "
+                     "query's view (0: any other view bin)."),
+    ] = 45.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the index performances and the queries.")] = 0,
     weights: Annotated[Path | None, typer.Option("--weights", help=_WEIGHTS_HELP)] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Also write the results as JSON here.")] = None,
@@ -133,7 +139,8 @@ def evaluate(
     threads: Annotated[int | None, typer.Option("--threads", min=1, help=_THREADS_HELP)] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
-    """Retrieval accuracy on the motion world's test split: motion codes against raw joints."""
+    """Retrieval accuracy on the motion world's test split: motion codes against raw joints, each query's motion
+    to be found performed by another character, seen at least --min-view-gap degrees of yaw away."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from clone.outputs import check_number, check_output
@@ -141,7 +148,7 @@ def evaluate(
     from pose_io.errors import InputError
     from retarget.api import load_retargeter
     from retarget.search import MotionCodeEncoder
-    from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table
+    from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table, summary
     from retarget.world import MotionWorld
 
     if out is not None:
@@ -149,9 +156,10 @@ def evaluate(
     check_number("--queries", queries, 1, 1_000_000)
     check_number("--length", length, 16, 100_000)
     check_number("--threads", threads, 1, 1024)
+    check_number("--min-view-gap", min_view_gap, 0, 180)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
-    config = RetrievalEvalConfig(queries=queries, length=length, seed=seed)
+    config = RetrievalEvalConfig(queries=queries, length=length, min_view_gap=min_view_gap, seed=seed)
     dev = resolve_device_option(device, threads)
     encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
     world = MotionWorld.build(mocap, cache, seed=world_seed)
@@ -160,8 +168,7 @@ def evaluate(
         task = bar.add_task("queries", total=None)
         doc = evaluate_retrieval(world.split("test"), encoder, config, fps=world.config.fps,
                                  progress=lambda done, total: bar.update(task, completed=done, total=total))
-    typer.echo(f"test split: {doc['tracks']} indexed performances of {doc['clips']} clips ({doc['groups']} motions, "
-               f"{doc['frames']:,} frames); {doc['queries']} queries of {length} frames")
+    typer.echo(summary(doc))
     typer.echo(markdown_table(doc))
     if out is not None:
         with atomic_file(out, overwrite=overwrite) as tmp:

@@ -8,7 +8,8 @@ whoever performs it and from whichever side it is filmed.
 
 Modules: :mod:`~retarget.search.features` (motion codes and the raw-joint baseline),
 :mod:`~retarget.search.index` (the index and its file), :mod:`~retarget.search.query` (one-pass normalised
-cross-correlation and the hits), :mod:`~retarget.search.evaluate` (accuracy on the motion world's test split).
+cross-correlation and the hits), :mod:`~retarget.search.protocol` (the evaluation's index entries, queries and
+candidates), :mod:`~retarget.search.evaluate` (accuracy on the motion world's test split).
 """
 
 from retarget.search.features import ENCODE_FPS, JointEncoder, MotionCodeEncoder, TrackEncoder, model_digest

@@ -99,5 +99,16 @@ def test_eval_on_a_tiny_world(tmp_path):
                     "--out", str(out), "--device", "cpu")  # fmt: skip
     assert result.exit_code == 0, result.output
     assert "motion codes (ours)" in result.output and "raw joints" in result.output
+    assert ">= 45 degrees of yaw away" in result.output  # the default gap
     doc = json.loads(out.read_text())
     assert doc["queries"] == 3 and set(doc["methods"]) == {"motion", "joints"}
+    assert doc["config"]["min_view_gap"] == 45.0 and doc["motion_over_joints"]["top1"] > 0
+
+    mocap, cache = ["--mocap", str(tmp_path / "mocap")], ["--cache", str(tmp_path / "cache")]
+    result = invoke("eval", *mocap, *cache, "--queries", "2", "--min-view-gap", "0", "--device", "cpu")
+    assert result.exit_code == 0, result.output
+    assert ">= 0 degrees of yaw away (0 draws redrawn)" in result.output
+    assert "180" in one_error_line(invoke("eval", *mocap, *cache, "--min-view-gap", "200"))
+    # Each view is indexed once per clip: no query keeps two candidates 180 degrees away.
+    assert "use a smaller --min-view-gap" in one_error_line(
+        invoke("eval", *mocap, *cache, "--min-view-gap", "180", "--device", "cpu"))
