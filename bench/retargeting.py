@@ -1,19 +1,33 @@
-"""Stage `retarget`: the retargeting network on a 120-frame clip and a 10,000-frame track.
+"""Stage `retarget`: the retargeting network on a 120-frame clip, a 10,000-frame track and 1,000 clips at once.
 
-Ours: ``load_retargeter(...).retarget(...)`` (windows of 256 frames, 8 at a time, under inference mode),
-timed end to end (pre-processing, network, integration, smoothing) and network only (``_decode_track``).
-Baseline: the plain way the authors' scripts run it: eager fp32 with autograd on, the whole track as one
-sequence through encode + decode, network only (so the baseline is not charged for our pre/post-processing).
+Baseline of the single-track cases: the plain way the authors' scripts run the network, eager torch fp32 with
+autograd on, the whole track as one sequence through encode + decode, network only (so the baseline is not
+charged for our pre/post-processing). Ours: ``retarget()`` end to end (body15 conversion, gap filling,
+smoothing, normalisation, windows, network, root integration, smoothing, placement) with either backend, and
+the numpy network alone over the same windows.
+
+Batch: 1,000 clips of 120 frames. In memory, ``retarget_many`` (all windows stacked) against ``retarget`` one
+clip at a time; as a command, ``clone retarget apply FOLDER`` (reads 1,000 npz, writes 1,000 npz) against one
+``clone retarget apply --backend torch`` process per clip, the only way before (timed on a few clips).
 """
 
 from __future__ import annotations
 
+import shutil
+import subprocess
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
 from typing import Any
 
 import torch
 
 from bench.data import source_track, tiled
 from bench.harness import row, time_call
+from bench.startup import clone_exe
+
+PLAIN = "eager torch fp32, autograd on, whole track in one pass (network only)"
 
 
 def _plain_forward(retargeter: Any, x: torch.Tensor, codes: Any) -> torch.Tensor:
@@ -27,35 +41,116 @@ def _plain_forward(retargeter: Any, x: torch.Tensor, codes: Any) -> torch.Tensor
                             retargeter._code_tensor(codes.view))
 
 
-def run(quick: bool = False, **_: object) -> dict[str, Any]:
+def _peak_mb(fn: Any) -> float:
+    """Peak of the memory numpy and Python allocate during ``fn()`` above what was allocated before, MiB."""
+    tracemalloc.start()
+    try:
+        fn()
+        return tracemalloc.get_traced_memory()[1] / 2**20
+    finally:
+        tracemalloc.stop()
+
+
+def _single_tracks(quick: bool) -> list[dict[str, Any]]:
     from retarget.api import PACKAGED_WEIGHTS, load_retargeter
 
-    torch.set_num_threads(1)
-    retargeter = load_retargeter(PACKAGED_WEIGHTS, device="cpu")
-    source, origin = source_track()
-    clip = tiled(source, 120)
-    codes = retargeter.reference_codes(clip)
+    ours_torch = load_retargeter(PACKAGED_WEIGHTS, device="cpu")
+    ours_numpy = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")
+    source, _ = source_track()
+    codes = ours_numpy.reference_codes(tiled(source, 120))
     rows = []
     cases = [("clip 120 frames", 120, 7, 0.3), ("track 10,000 frames", 2_000 if quick else 10_000, 3, 0.0)]
     for case, frames, repeats, min_time in cases:
         track = tiled(source, frames)
-        x = retargeter._input(track, "bench track")  # [1, 30, T]
-        if quick:
-            repeats = max(2, repeats // 2)
-        base = time_call(lambda x=x: _plain_forward(retargeter, x, codes), repeats, 1, min_time)
-        net = time_call(lambda x=x: retargeter._decode_track(x, codes), repeats, 1, min_time)
-        api = time_call(lambda t=track: retargeter.retarget(t, codes), repeats, 1, min_time)
-        diff = float((_plain_forward(retargeter, x, codes)[..., : x.shape[-1]].detach()
-                      - retargeter._decode_track(x, codes)).abs().max()) if frames <= 256 else None
-        plain = "eager fp32, autograd on, whole track in one pass (network only)"
+        x = ours_torch._input(track, "bench track")  # [1, 30, T]
+        repeats = max(2, repeats // 2) if quick else repeats
         case = case if frames != 2_000 else "track 2,000 frames (--quick)"
-        rows.append(row(case, "ours: windowed, inference mode (network only)", net.rate(frames), "frames/s", base.rate(frames), plain, max_abs_diff=diff))
-        rows.append(row(case, "ours: retarget() end to end", api.rate(frames), "frames/s", base.rate(frames), plain))
+        base = time_call(lambda x=x: _plain_forward(ours_torch, x, codes), repeats, 1, min_time).rate(frames)
+        prepared = ours_numpy.prepare_motion(track, "bench track")
+        for name, fn in [
+            ("ours, torch backend: retarget() end to end", lambda t=track: ours_torch.retarget(t, codes)),
+            ("ours, numpy backend: retarget() end to end", lambda t=track: ours_numpy.retarget(t, codes)),
+            ("ours, numpy backend: windows + network + output (track prepared)",
+             lambda p=prepared: ours_numpy.retarget_prepared([p], codes)),
+        ]:  # fmt: skip
+            rate = time_call(fn, repeats, 1, min_time).rate(frames)
+            extra = {"peak_mb": round(_peak_mb(fn), 1)} if "numpy" in name else {}
+            rows.append(row(case, name, rate, "frames/s", base, PLAIN, **extra))
+    if not quick:  # memory bounded: ten times the track, not ten times the working memory
+        long = tiled(source, 100_000)
+        peak = _peak_mb(lambda: ours_numpy.retarget(long, codes))
+        rows.append(row("track 100,000 frames", "ours, numpy backend: retarget() peak traced memory", peak, "MiB",
+                        higher_is_better=False, per_frame_bytes=round(peak * 2**20 / 100_000)))  # fmt: skip
+    return rows
+
+
+def _write_clips(folder: Path, count: int) -> Path:
+    """``count`` different 120-frame clips of the source track as npz files in ``folder/clips``."""
+    from pose_io.writers import write_track
+
+    source, _ = source_track()
+    long = tiled(source, 120 + 200)
+    clips = folder / "clips"
+    clips.mkdir()
+    for i in range(count):
+        start = (7 * i) % 200
+        write_track(long.frames(start, start + 120), clips / f"clip{i:04d}.npz")
+    return clips
+
+
+def _batch(quick: bool) -> list[dict[str, Any]]:
+    from pose_io.readers import read_track
+    from retarget.api import PACKAGED_WEIGHTS, load_retargeter
+
+    count = 200 if quick else 1_000
+    case = f"batch {count:,} clips of 120 frames"
+    tmp = Path(tempfile.mkdtemp(prefix="bench_batch_"))
+    try:
+        clips = _write_clips(tmp, count)
+        ours = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")
+        tracks = [read_track(p) for p in sorted(clips.iterdir())]
+        codes = ours.reference_codes(tracks[0])
+        one_by_one = time_call(lambda: [ours.retarget(t, codes) for t in tracks], 2, 1).rate(120 * count)
+        many = time_call(lambda: ours.retarget_many(tracks, codes), 2, 1).rate(120 * count)
+        rows = [row(case, "ours, numpy: retarget_many() (in memory, windows of all clips stacked)", many,
+                    "frames/s", one_by_one, "retarget() one clip at a time (numpy, in memory)")]  # fmt: skip
+        reference = min(clips.iterdir())
+        per_clip = []
+        for path in sorted(clips.iterdir())[:3]:  # the way before: one process per clip, torch
+            out = tmp / "single.npz"
+            t0 = time.perf_counter()
+            subprocess.run([*clone_exe(), "retarget", "apply", str(path), "--skeleton", str(reference), "--out",
+                            str(out), "--backend", "torch", "--device", "cpu", "--threads", "1"], check=True,
+                           capture_output=True)  # fmt: skip
+            per_clip.append(time.perf_counter() - t0)
+            out.unlink()
+        before = 120 / (sum(per_clip) / len(per_clip))
+        t0 = time.perf_counter()
+        subprocess.run([*clone_exe(), "retarget", "apply", str(clips), "--skeleton", str(reference), "--out",
+                        str(tmp / "moved"), "--device", "cpu", "--threads", "1"], check=True, capture_output=True)
+        seconds = time.perf_counter() - t0
+        rows.append(row(case, "clone retarget apply FOLDER (one process: read, retarget, write npz)",
+                        120 * count / seconds, "frames/s", before,
+                        "one `clone retarget apply --backend torch` process per clip (mean of 3)",
+                        seconds=round(seconds, 2)))  # fmt: skip
+        return rows
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def run(quick: bool = False, **_: object) -> dict[str, Any]:
+    from retarget.blas import set_blas_threads
+
+    torch.set_num_threads(1)
+    set_blas_threads(1)
+    _, origin = source_track()
     return {
-        "rows": rows,
+        "rows": _single_tracks(quick) + _batch(quick),
         "notes": [
-            f"input: {origin}, tiled forwards-backwards to the length; weights {PACKAGED_WEIGHTS.name}; 1 thread",
-            "end to end includes body15 conversion, normalisation, root integration, smoothing and placement",
-            "max_abs_diff: network outputs of ours vs plain on the clip (one window, so they must agree)",
+            (f"input: {origin}, tiled forwards-backwards to the length; packaged weights; 1 thread (torch and "
+             "numpy's OpenBLAS); the commands run with --threads 1"),
+            "default windows: 1,024 frames, 64 shared, 2 per pass (2,048 frames per network call)",
+            "peak_mb: tracemalloc peak during one call (numpy and Python allocations; torch's are not traced)",
+            "the machine is shared with a training run on one of its 2 cores: absolute rates move with the load",
         ],
     }

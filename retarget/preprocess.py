@@ -11,25 +11,31 @@ Conventions of Aberman et al. 2019 (and of their released weights):
   view encoders; channels 28-29 (the velocity) only the motion encoder.
 
 :func:`joints_to_channels` builds that tensor and :func:`channels_to_joints` undoes it; everything else
-reaches channel groups through :func:`pose_channels` and :func:`velocity_channels`.
+reaches channel groups through :func:`pose_channels` and :func:`velocity_channels`. These take numpy arrays
+or torch tensors alike and return the same kind, so the torch-free inference path (:mod:`retarget.numpy_net`)
+shares them: this module does not import torch unless it is handed a tensor.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import torch
 
 from pose_io.clean import drop_outlier_joints, hold_fill, smooth_joints
 from pose_io.errors import InputError
-from pose_io.layouts import BODY15, get_layout, require_convertible
+from pose_io.layouts import BODY15, convert_arrays, get_layout, require_convertible
 from pose_io.measures import foot_points, skeleton_height, skeleton_heights
 from pose_io.track import PoseTrack
+
+if TYPE_CHECKING:
+    import torch
 
 log = logging.getLogger(__name__)
 
@@ -95,6 +101,8 @@ class NormStats:
 
     def channel_tensors(self, like: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Mean and std as ``[1, 30, 1]`` tensors with ``like``'s dtype and device."""
+        import torch
+
         mean = torch.tensor(self.mean.reshape(1, NUM_CHANNELS, 1), dtype=like.dtype, device=like.device)
         std = torch.tensor(self.std.reshape(1, NUM_CHANNELS, 1), dtype=like.dtype, device=like.device)
         return mean, std
@@ -105,62 +113,101 @@ class NormStats:
         return self.std[-1]
 
 
-def _rows(joints: torch.Tensor) -> torch.Tensor:
+# The channel functions below take a numpy array or a torch tensor and give back the same kind (and, for a
+# tensor, do exactly what they did when they took tensors only).
+Array = Any  # np.ndarray | torch.Tensor
+
+
+def _is_tensor(x: Array) -> bool:
+    """Whether ``x`` is a torch tensor, without importing torch (no tensor exists unless torch is loaded)."""
+    torch = sys.modules.get("torch")
+    return torch is not None and isinstance(x, torch.Tensor)
+
+
+def _channel_stats(stats: NormStats, like: Array) -> tuple[Array, Array]:
+    """Mean and std as ``[1, 30, 1]`` with ``like``'s kind and dtype (and device)."""
+    if _is_tensor(like):
+        return stats.channel_tensors(like)
+    shape = (1, NUM_CHANNELS, 1)
+    return stats.mean.reshape(shape).astype(like.dtype), stats.std.reshape(shape).astype(like.dtype)
+
+
+def _rows(joints: Array) -> Array:
     """[B, T, 15, 2] joints -> [B, T, 15, 2] rows (14 root-relative joints, then root velocity)."""
     root = joints[:, :, ROOT_INDEX]  # [B, T, 2]
     local = joints[:, :, list(LOCAL_INDEX)] - root[:, :, None]  # [B, T, 14, 2]
-    velocity = torch.zeros_like(root)
+    if _is_tensor(joints):
+        import torch
+
+        velocity = torch.zeros_like(root)
+        velocity[:, 1:] = root[:, 1:] - root[:, :-1]
+        return torch.cat([local, velocity[:, :, None]], dim=2)
+    velocity = np.zeros_like(root)
     velocity[:, 1:] = root[:, 1:] - root[:, :-1]
-    return torch.cat([local, velocity[:, :, None]], dim=2)
+    return np.concatenate([local, velocity[:, :, None]], axis=2)
 
 
-def joints_to_channels(joints: torch.Tensor, stats: NormStats) -> torch.Tensor:
+def joints_to_channels(joints: Array, stats: NormStats) -> Array:
     """The normalised network input of body15 poses.
 
     Args:
-        joints: [B, T, 15, 2] body15 coordinates in the network's canvas (no NaN).
+        joints: [B, T, 15, 2] body15 coordinates in the network's canvas (no NaN); a tensor or an array.
         stats: normalisation statistics.
 
     Returns:
-        [B, 30, T] tensor (channel ``2r + c`` = coordinate ``c`` of row ``r``).
+        [B, 30, T] of the same kind and dtype (channel ``2r + c`` = coordinate ``c`` of row ``r``).
     """
     b, t = joints.shape[:2]
     rows = _rows(joints)  # [B, T, 15, 2]
-    x = rows.reshape(b, t, NUM_CHANNELS).transpose(1, 2)  # [B, 30, T]
-    mean, std = stats.channel_tensors(x)
+    x = rows.reshape(b, t, NUM_CHANNELS).swapaxes(1, 2)  # [B, 30, T]
+    mean, std = _channel_stats(stats, x)
     return (x - mean) / std
 
 
-def channels_to_joints(x: torch.Tensor, stats: NormStats, start: torch.Tensor | None = None) -> torch.Tensor:
+def channels_to_joints(x: Array, stats: NormStats, start: Array | None = None) -> Array:
     """Undo :func:`joints_to_channels`: body15 poses whose root follows the integrated velocity.
 
     The root of frame ``t`` is ``start + v[0] + ... + v[t]`` (the authors' convention, ``v[0]`` included).
 
     Args:
-        x: [B, 30, T] normalised network output or input.
+        x: [B, 30, T] normalised network output or input; a tensor or an array.
         stats: normalisation statistics.
         start: [B, 2] or [2] start point of the root trajectory; default 0.
 
     Returns:
-        [B, T, 15, 2] body15 coordinates in the canvas.
+        [B, T, 15, 2] body15 coordinates in the canvas, of ``x``'s kind and dtype.
     """
     b, _, t = x.shape
-    mean, std = stats.channel_tensors(x)
-    rows = (x * std + mean).transpose(1, 2).reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
-    root = torch.cumsum(rows[:, :, -1], dim=1)  # [B, T, 2]
+    mean, std = _channel_stats(stats, x)
+    if _is_tensor(x):
+        import torch
+
+        rows = (x * std + mean).transpose(1, 2).reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
+        root = torch.cumsum(rows[:, :, -1], dim=1)  # [B, T, 2]
+        if start is not None:
+            root = root + torch.as_tensor(start, dtype=x.dtype, device=x.device).reshape(-1, 1, 2)
+        joints = x.new_zeros(b, t, len(LAYOUT), 2)
+        joints[:, :, list(LOCAL_INDEX)] = rows[:, :, :-1]
+        return joints + root[:, :, None]
+    # The same element-wise operations as above, time-major (contiguous) from the start: the same numbers, faster.
+    shape = (1, 1, NUM_CHANNELS)
+    rows = (np.ascontiguousarray(x.swapaxes(1, 2)) * std.reshape(shape) + mean.reshape(shape))
+    rows = rows.reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
+    root = np.cumsum(rows[:, :, -1], axis=1)  # [B, T, 2]
     if start is not None:
-        root = root + torch.as_tensor(start, dtype=x.dtype, device=x.device).reshape(-1, 1, 2)
-    joints = x.new_zeros(b, t, len(LAYOUT), 2)
-    joints[:, :, list(LOCAL_INDEX)] = rows[:, :, :-1]
-    return joints + root[:, :, None]
+        root = root + np.asarray(start, dtype=x.dtype).reshape(-1, 1, 2)
+    joints = np.empty((b, t, len(LAYOUT), 2), dtype=x.dtype)
+    joints[:, :, list(LOCAL_INDEX)] = rows[:, :, :-1] + root[:, :, None]
+    joints[:, :, ROOT_INDEX] = 0.0 + root  # (0 + root, as the zeros above give; -0.0 becomes 0.0 alike)
+    return joints
 
 
-def pose_channels(x: torch.Tensor) -> torch.Tensor:
+def pose_channels(x: Array) -> Array:
     """[B, 30, T] -> [B, 28, T], the root-relative pose (what the static encoders see)."""
     return x[:, :POSE_CHANNELS]
 
 
-def velocity_channels(x: torch.Tensor) -> torch.Tensor:
+def velocity_channels(x: Array) -> Array:
     """[B, 30, T] -> [B, 2, T], the root velocity."""
     return x[:, POSE_CHANNELS:]
 
@@ -173,7 +220,7 @@ def row_statistics(windows: np.ndarray, min_std: float = 1.0) -> NormStats:
         min_std: floor of the std in canvas pixels: a coordinate that hardly varies in the training data
             (a rigid pelvis seen from the front) must not turn a pixel of detection noise into a huge input.
     """
-    rows = _rows(torch.as_tensor(np.asarray(windows, dtype=np.float64))).numpy()  # [N, T, 15, 2]
+    rows = _rows(np.asarray(windows, dtype=np.float64))  # [N, T, 15, 2]
     flat = rows.reshape(-1, NUM_ROWS, 2)
     return NormStats(flat.mean(axis=0), np.maximum(flat.std(axis=0), min_std))
 
@@ -190,6 +237,11 @@ def to_body15(track: PoseTrack, name: str = "track") -> PoseTrack:
     layout conversion, with one warning naming ``name``. Tracks read by :mod:`pose_io.readers` have
     been through the same rule already.
     """
+    return _without_outliers(track, name).to_layout(LAYOUT.name)
+
+
+def _without_outliers(track: PoseTrack, name: str) -> PoseTrack:
+    """``track`` (any layout that can give body15) with outlier joints dropped, warning once."""
     try:
         require_convertible(get_layout(track.layout), LAYOUT)
     except InputError as exc:
@@ -197,7 +249,13 @@ def to_body15(track: PoseTrack, name: str = "track") -> PoseTrack:
     track, dropped = drop_outlier_joints(track)
     if dropped.count:
         log.warning("%s", dropped.message(name))
-    return track.to_layout(LAYOUT.name)
+    return track
+
+
+def _body15_joints(track: PoseTrack, name: str) -> np.ndarray:
+    """``to_body15(track, name).joints`` ([T, 15, 2] float32) without validating a new body15 track."""
+    track = _without_outliers(track, name)
+    return convert_arrays(track.joints, track.confidence, track.joint_layout, LAYOUT)[0]
 
 
 def canvas_scale(image_size: tuple[int, int], config: PreprocessConfig, joints: np.ndarray | None = None) -> float:
@@ -272,7 +330,7 @@ def prepare(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> 
     Raises:
         InputError: see :func:`filled_body15`, or a body too small to scale.
     """
-    body = to_body15(track, name).joints
+    body = _body15_joints(track, name)
     filled = _filled(body, name)
     scale = _scale(track.image_size, config, body, name)
     return PreparedTrack(smooth_joints(filled, config.input_sigma) * scale, scale, body)
@@ -330,12 +388,19 @@ def placement_of(joints: np.ndarray, name: str = "track") -> Placement:
         InputError: the root or both ankles are never seen, or a bone of the height never is.
     """
     height = float(skeleton_heights(np.asarray(joints, dtype=np.float64)[None], LAYOUT)[0])
-    with _quiet_nan():
-        root_x = float(np.nanmedian(joints[:, ROOT_INDEX, 0]))
-        ground_y = float(np.nanmedian(foot_points(joints, LAYOUT)[:, 1]))
+    root_x, ground_y = _stand(joints)
     if not all(np.isfinite(v) for v in (height, root_x, ground_y)):
         raise InputError(f"{name}: cannot tell where the person stands (root or ankles never detected)")
     return Placement(height, root_x, ground_y)
+
+
+def _stand(joints: np.ndarray) -> tuple[float, float]:
+    """(median root x, median ground line) of [T, 15, 2] body15 joints (NaN allowed; NaN when never seen)."""
+    root, ground = joints[:, ROOT_INDEX, 0], foot_points(joints, LAYOUT)[:, 1]
+    if not (np.isnan(root).any() or np.isnan(ground).any()):  # the same medians, without nanmedian's overhead
+        return float(np.median(root)), float(np.median(ground))
+    with _quiet_nan():
+        return float(np.nanmedian(root)), float(np.nanmedian(ground))
 
 
 def place(joints: np.ndarray, target: Placement) -> np.ndarray:
@@ -348,8 +413,10 @@ def place(joints: np.ndarray, target: Placement) -> np.ndarray:
     Returns:
         [T, 15, 2] translated copy.
     """
-    here = placement_of(joints)
-    return joints + np.array([target.root_x - here.root_x, target.ground_y - here.ground_y])
+    root_x, ground_y = _stand(joints)  # the height placement_of would also measure is not needed here
+    if not (np.isfinite(root_x) and np.isfinite(ground_y)):
+        raise InputError("track: cannot tell where the person stands (root or ankles never detected)")
+    return joints + np.array([target.root_x - root_x, target.ground_y - ground_y])
 
 
 @contextlib.contextmanager

@@ -1,11 +1,16 @@
-"""Where torch runs: thread count for the cores actually free, and the `--device` option."""
+"""Where torch runs: thread count for the cores actually free, and the `--device` option.
+
+torch is imported inside the functions that need it: :func:`free_cores` also serves the torch-free path.
+"""
 
 from __future__ import annotations
 
 import logging
 import os
+from typing import TYPE_CHECKING
 
-import torch
+if TYPE_CHECKING:
+    import torch
 
 log = logging.getLogger(__name__)
 
@@ -29,6 +34,8 @@ def free_cores() -> int:
 
 def configure_threads(threads: int | None = None) -> int:
     """Set torch's intra-op threads to ``threads`` or to the free cores; returns the number set."""
+    import torch
+
     n = threads if threads and threads > 0 else free_cores()
     torch.set_num_threads(n)
     log.debug("torch threads: %d", n)
@@ -41,6 +48,8 @@ def resolve_device(spec: str = "auto") -> torch.device:
     Raises:
         ValueError: unknown spec, or CUDA asked for but not available.
     """
+    import torch
+
     spec = spec.strip().lower()
     if spec == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")

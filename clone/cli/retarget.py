@@ -1,16 +1,19 @@
 """`clone retarget`: move a driver's motion onto a reference person's skeleton and view; train the network.
 
-torch and the pose readers are imported inside the commands so that `clone --help` stays fast.
+torch and the pose readers are imported inside the commands so that `clone --help` stays fast, and `apply`
+imports no torch at all when the weights have a numpy export (``--backend auto``).
 """
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from clone.cli.choices import Ablation, Split, Variant
+from clone.cli.choices import Ablation, OutputFormat, Split, Variant
 from clone.cli.common import DEVICE_HELP, console, training_device, user_errors
 
 retarget_app = typer.Typer(
@@ -34,50 +37,125 @@ _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default:
 @user_errors
 def apply(
     motion_poses: Annotated[
-        Path, typer.Argument(help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv).")
+        list[Path],
+        typer.Argument(help="Driver's poses (OpenPose folder, COCO/AlphaPose JSON, npz, npy, csv); several, or a "
+                       "folder of them, are retargeted together in one run (--out is then a folder)."),
     ],
     skeleton: Annotated[Path, typer.Option("--skeleton", help="Reference person's poses: skeleton, placement, frame.")],
-    out: Annotated[Path, typer.Option("--out", help="Output: a folder (OpenPose JSON), or a .npz / .csv file.")],
+    out: Annotated[Path, typer.Option("--out", help="Output: a folder (OpenPose JSON), or a .npz / .csv file; with "
+                                      "several inputs a folder that gets one output per input, named after it.")],
     view: Annotated[
         Path | None, typer.Option("--view", help="Poses whose camera view to use (default: --skeleton's).")
     ] = None,
     preview: Annotated[Path | None, typer.Option("--preview", help="Also draw the result into this .mp4.")] = None,
     weights: Annotated[
         Path | None,
-        typer.Option("--weights", help="clone2d checkpoint, or the authors' pretrained_*.pth (default: shipped)."),
+        typer.Option("--weights", help="clone2d checkpoint (or its numpy export, .npz), or the authors' "
+                     "pretrained_*.pth (default: shipped)."),
     ] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    backend: Annotated[
+        str, typer.Option("--backend", help="auto | numpy | torch. auto: numpy on the CPU (torch is not even "
+                          "imported) when the weights have an up-to-date .npz export beside them, else torch.")
+    ] = "auto",
+    to: Annotated[
+        OutputFormat | None,
+        typer.Option("--to", parser=OutputFormat, help="Format of the outputs of several inputs (default npz)."),
+    ] = None,
+    threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
-    from clone.outputs import FOLDER, check_output
+    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
-    from pose_io.video import write_pose_video
-    from pose_io.writers import write_track
-    from retarget.api import load_retargeter
-    from retarget.runtime import configure_threads
+    from retarget.batch import find_motions, is_batch, retarget_files
 
-    # Both outputs are checked before any work: a bad --preview must not fail after --out is written.
-    check_output(out, "--out", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
-    if preview is not None:
-        check_output(preview, "--preview", suffixes=(".mp4",), overwrite=overwrite)
-        if preview.absolute() == out.absolute():
-            raise InputError(f"--preview {preview}: the same path as --out")
+    check_number("--threads", threads, 1, MAX_THREADS)
+    batch = is_batch(motion_poses)
+    # Every output is checked before any work: a bad --preview must not fail after --out is written.
+    if batch:
+        if preview is not None:
+            raise InputError("--preview draws one result; it takes a single input")
+        fmt = to.value if to is not None else "npz"
+        motions = find_motions(motion_poses)
+        outputs = _batch_outputs(out, motions, fmt, overwrite)
+    else:
+        if to is not None:
+            raise InputError("--to sets the format of several inputs' outputs; with one input --out's name does")
+        check_output(out, "--out", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
+        if preview is not None:
+            check_output(preview, "--preview", suffixes=(".mp4",), overwrite=overwrite)
+            if preview.absolute() == out.absolute():
+                raise InputError(f"--preview {preview}: the same path as --out")
     image_size = parse_size(size) if size else None
-    motion = read_track(motion_poses, image_size=image_size)
+    motion = None if batch else read_track(motion_poses[0], image_size=image_size)
     reference = read_track(skeleton, image_size=image_size)
     view_track = read_track(view, image_size=image_size) if view is not None else None
-    configure_threads()
-    retargeter = load_retargeter(weights, device)
+    retargeter = _retargeter(weights, device, backend, threads)
     codes = retargeter.reference_codes(reference, view_track, name=str(skeleton), view_name=str(view))
-    result = retargeter.retarget(motion, codes, name=str(motion_poses))
+    if batch:
+        with _progress("retargeting") as update:
+            frames = retarget_files(retargeter, codes, motions, outputs, fmt=fmt, overwrite=overwrite,
+                                    read=lambda p: read_track(p, image_size=image_size), progress=update)  # fmt: skip
+        console.print(f"wrote {len(outputs)} {'clip' if len(outputs) == 1 else 'clips'} to {out} ({frames:,} frames, "
+                      f"{fmt}, body15, {codes.image_size[0]}x{codes.image_size[1]})")  # fmt: skip
+        return
+    from pose_io.writers import write_track
+
+    result = retargeter.retarget(motion, codes, name=str(motion_poses[0]))
     write_track(result, out, overwrite=overwrite)
     console.print(f"wrote {out} ({len(result)} frames, body15, {result.image_size[0]}x{result.image_size[1]})")
     if preview is not None:
+        from pose_io.video import write_pose_video
+
         write_pose_video(result, preview, overwrite=overwrite)
         console.print(f"wrote {preview}")
+
+
+def _batch_outputs(out: Path, motions: list[Path], fmt: str, overwrite: bool) -> list[Path]:
+    """The outputs of several inputs inside the folder --out, each checked (InputError before any work)."""
+    from clone.outputs import check_output, check_writable_folder
+    from pose_io.errors import InputError
+    from retarget.batch import batch_outputs
+
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: is a file; several inputs are written into a folder")
+    if out.suffix and not out.exists():
+        raise InputError(f"--out {out}: several inputs are written into a folder; give one without a suffix")
+    check_writable_folder(out, f"--out {out}")
+    outputs = batch_outputs(motions, out, fmt)
+    for path in outputs:
+        check_output(path, "--out", overwrite=overwrite)
+    return outputs
+
+
+def _retargeter(weights: Path | None, device: str, backend: str, threads: int | None):  # -> RetargeterBase
+    """The network for --weights/--device/--backend, its threads set (BLAS threads for numpy, torch's otherwise)."""
+    from retarget.api import NumpyRetargeter, load_retargeter
+    from retarget.blas import set_blas_threads
+    from retarget.runtime import free_cores
+
+    retargeter = load_retargeter(weights, device, backend=backend.strip().lower())
+    if isinstance(retargeter, NumpyRetargeter):
+        set_blas_threads(threads or free_cores())
+    elif retargeter.device.type == "cpu":
+        from retarget.runtime import configure_threads
+
+        configure_threads(threads)
+    return retargeter
+
+
+@contextlib.contextmanager
+def _progress(what: str) -> Iterator[Callable[[int, int], None]]:
+    """A transient progress bar; yields ``update(done, total)``."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    with Progress(TextColumn(what), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(), console=console,
+                  transient=True) as bar:  # fmt: skip
+        task = bar.add_task(what, total=None)
+        yield lambda done, total: bar.update(task, completed=done, total=total)
 
 
 @retarget_app.command("train")

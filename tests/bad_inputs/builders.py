@@ -143,3 +143,32 @@ def earlier_demo(tmp: Path) -> None:
     (tmp / "demo" / ".clone2d-demo").write_text("made by clone demo; `clone demo` replaces this folder\n")
     (tmp / "demo" / "report").mkdir()
     (tmp / "demo" / "report" / "report.html").write_text("<html>earlier report</html>")
+
+
+def clips(tmp: Path) -> None:
+    """``clips/``: two good driver tracks, ``a.npz`` and ``b.npz`` (a batch for `retarget apply`)."""
+    from pose_io.writers import write_track
+
+    (tmp / "clips").mkdir()
+    write_track(_figure(), tmp / "clips" / "a.npz")
+    write_track(_figure(30), tmp / "clips" / "b.npz")
+
+
+def clips_bad(tmp: Path) -> None:
+    """:func:`clips` and a corrupt ``clips/c.npz`` among them."""
+    clips(tmp)
+    (tmp / "clips" / "c.npz").write_bytes(b"this is not a zip archive")
+
+
+def clips_clash(tmp: Path) -> None:
+    """:func:`clips` and ``clips/a.csv``, whose output would be ``a.npz`` too."""
+    from pose_io.writers import write_track
+
+    clips(tmp)
+    write_track(_figure(), tmp / "clips" / "a.csv")
+
+
+def old_batch_output(tmp: Path) -> None:
+    """``moved/b.npz``: the output of an earlier batch."""
+    (tmp / "moved").mkdir()
+    (tmp / "moved" / "b.npz").write_bytes(b"an earlier result")

@@ -162,3 +162,42 @@ def test_parity_preprocessing(shared_dir, clip):
     stats = NormStats(np.load(weights / "meanpose_with_view.npy"), np.load(weights / "stdpose_with_view.npy"))
     x = joints_to_channels(torch.from_numpy(raw)[None], stats).numpy()
     np.testing.assert_allclose(x, np.load(parity / f"full_norm_{clip}.npy"), atol=1e-4)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The numpy inference path shares these functions: arrays give exactly what tensors give.
+
+
+def test_channel_functions_take_arrays_and_give_what_tensors_give():
+    stats = _stats(3)
+    joints = _random_joints(b=3, t=40, seed=3).double()
+    x_torch = joints_to_channels(joints, stats)
+    x_numpy = joints_to_channels(joints.numpy(), stats)
+    assert isinstance(x_numpy, np.ndarray) and x_numpy.dtype == np.float64
+    np.testing.assert_array_equal(x_numpy, x_torch.numpy())
+    start = np.array([[10.0, 20.0], [0.0, 1.0], [5.0, 5.0]])
+    back_torch = channels_to_joints(x_torch, stats, torch.from_numpy(start))
+    back_numpy = channels_to_joints(x_numpy, stats, start)
+    np.testing.assert_array_equal(back_numpy, back_torch.numpy())
+    np.testing.assert_array_equal(pose_channels(x_numpy), x_numpy[:, :POSE_CHANNELS])
+    np.testing.assert_array_equal(velocity_channels(x_numpy), x_numpy[:, POSE_CHANNELS:])
+    assert joints_to_channels(joints.numpy().astype(np.float32), stats).dtype == np.float32
+
+
+def test_smoothing_is_scipys_gaussian_filter_to_the_bit():
+    """pose_io.clean.smooth_joints (numpy, so that short runs need not import scipy) = scipy's gaussian_filter1d."""
+    from scipy.ndimage import gaussian_filter1d
+
+    from pose_io.clean import smooth_joints
+
+    rng = np.random.default_rng(0)
+    for trial in range(300):
+        frames = int(rng.integers(1, 70))  # shorter than the kernel too (repeated reflection)
+        shape = (frames, *rng.integers(1, 5, size=int(rng.integers(0, 3))))
+        dtype = np.float32 if trial % 3 == 0 else np.float64
+        x = (rng.normal(size=shape) * 10 ** rng.uniform(-3, 4)).astype(dtype)
+        sigma = float(rng.choice([0.2, 0.5, 1.0, 2.0, 3.3, 7.0]))
+        expected = gaussian_filter1d(x, sigma=sigma, axis=0, mode="reflect")
+        got = smooth_joints(x, sigma)
+        assert got.dtype == expected.dtype
+        np.testing.assert_array_equal(got, expected, err_msg=f"{shape} {dtype} sigma={sigma}")

@@ -7,7 +7,6 @@ import os
 import pytest
 import torch
 
-from retarget import runtime
 from retarget.runtime import configure_threads, free_cores, resolve_device
 
 
@@ -56,13 +55,13 @@ def test_configure_threads(machine, restore_threads):
 def test_resolve_device(monkeypatch):
     assert resolve_device("cpu") == torch.device("cpu")
     assert resolve_device(" CPU ") == torch.device("cpu")
-    monkeypatch.setattr(runtime.torch.cuda, "is_available", lambda: False)
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
     assert resolve_device() == torch.device("cpu")
     assert resolve_device("auto") == torch.device("cpu")
     with pytest.raises(ValueError, match="device 'cuda:1' asked for, but no CUDA GPU is available"):
         resolve_device("cuda:1")
     with pytest.raises(ValueError, match="unknown device 'tpu'; valid: auto, cpu, cuda, cuda:N"):
         resolve_device("tpu")
-    monkeypatch.setattr(runtime.torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
     assert resolve_device("auto") == torch.device("cuda")
     assert resolve_device("cuda:1") == torch.device("cuda", 1)

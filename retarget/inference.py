@@ -1,0 +1,306 @@
+"""What retargeting does whatever runs the network: settings, reference codes, and the algorithm around the network.
+
+:class:`RetargeterBase` prepares tracks (:mod:`retarget.preprocess`), cuts them into windows and stacks the
+windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and places the result; a backend
+(:mod:`retarget.api`: torch or numpy) only runs the network on numpy arrays.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pose_io.clean import smooth_joints
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+from retarget.preprocess import (
+    NormStats,
+    Placement,
+    PreparedTrack,
+    PreprocessConfig,
+    body15_track,
+    canvas_scale,
+    channels_to_joints,
+    joints_to_channels,
+    place,
+    placement_of,
+    prepare,
+)
+from retarget.windows import pad_to_multiple, run_windowed
+
+
+@dataclass(frozen=True)
+class InferenceConfig:
+    """How tracks are cut for the network.
+
+    Attributes:
+        window: frames per network pass for long tracks (a multiple of 8); memory is bounded by it.
+        overlap: frames neighbouring passes share; outputs are cross-faded linearly over them.
+        code_window: window length the reference's static codes are averaged over (the training length).
+        code_stride: step between those windows.
+        batch: windows of ``window`` frames run through the network at once (``batch * window`` frames per
+            pass; short clips of one length are stacked up to that many frames).
+    """
+
+    window: int = 1024
+    overlap: int = 64
+    code_window: int = 64
+    code_stride: int = 32
+    batch: int = 2
+
+    def __post_init__(self) -> None:
+        if self.window % 8 or self.code_window % 8:
+            raise ValueError("window and code_window must be multiples of 8")
+        if not 0 <= self.overlap < self.window:
+            raise ValueError("overlap must be in [0, window)")
+        if self.code_stride <= 0 or self.batch <= 0:
+            raise ValueError("code_stride and batch must be positive")
+
+
+@dataclass(frozen=True, eq=False)
+class ReferenceCodes:
+    """What retargeting needs to know about a reference person.
+
+    Attributes:
+        body: [Cb] float32 skeleton code, or None for a network without a skeleton encoder.
+        view: [Cv] float32 view code, or None for a network without a view encoder.
+        placement: median pose height, root x and ground line, in the reference's pixels.
+        image_size: (width, height) of the reference's frames.
+        scale: factor from the reference's pixels to the network canvas (None in files written before it
+            was stored: then the image-height rule).
+    """
+
+    body: np.ndarray | None
+    view: np.ndarray | None
+    placement: Placement
+    image_size: tuple[int, int]
+    scale: float | None = None
+
+    def to_dict(self) -> dict[str, np.ndarray]:
+        """Plain arrays (float32 codes, float64 placement, int64 size) for storing in other files."""
+        out = {
+            "placement": np.array(
+                [self.placement.height, self.placement.root_x, self.placement.ground_y], dtype=np.float64
+            ),
+            "image_size": np.array(self.image_size, dtype=np.int64),
+        }
+        if self.scale is not None:
+            out["scale"] = np.array(self.scale, dtype=np.float64)
+        for name, code in (("body", self.body), ("view", self.view)):
+            if code is not None:
+                out[name] = np.asarray(code, dtype=np.float32).copy()
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> ReferenceCodes:
+        """Inverse of :meth:`to_dict` (values may be numpy arrays, tensors or lists).
+
+        Raises:
+            InputError: missing or malformed entries.
+        """
+        try:
+            placement = np.asarray(data["placement"], dtype=np.float64).reshape(3)
+            size = np.asarray(data["image_size"]).reshape(2)
+            codes = {
+                k: np.asarray(data[k], dtype=np.float32).reshape(-1) if data.get(k) is not None else None
+                for k in ("body", "view")
+            }
+            scale = float(np.asarray(data["scale"]).reshape(())) if data.get("scale") is not None else None
+        except (KeyError, ValueError, TypeError) as exc:
+            raise InputError(f"reference codes: missing or malformed entry ({exc})") from None
+        if not np.isfinite(placement).all() or (size <= 0).any():
+            raise InputError("reference codes: invalid placement or image size")
+        if scale is not None and not (np.isfinite(scale) and scale > 0):
+            raise InputError("reference codes: invalid canvas scale")
+        return cls(
+            codes["body"], codes["view"], Placement(*map(float, placement)), (int(size[0]), int(size[1])), scale
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedMotion:
+    """A driver track reduced to what retargeting it needs (:meth:`RetargeterBase.prepare_motion`).
+
+    Attributes:
+        x: [30, T] float32 normalised network input.
+        fps: the driver's frame rate (the output keeps it).
+        name: how messages call it.
+    """
+
+    x: np.ndarray
+    fps: float
+    name: str
+
+    def __len__(self) -> int:
+        return int(self.x.shape[-1])
+
+
+class RetargeterBase:
+    """What both backends do the same way; a backend supplies ``model`` and runs the network on numpy arrays.
+
+    Subclasses are dataclasses with ``model``, ``stats`` (:class:`NormStats`), ``preprocess``
+    (:class:`PreprocessConfig`) and ``config`` (:class:`InferenceConfig`).
+    """
+
+    model: Any
+    stats: NormStats
+    preprocess: PreprocessConfig
+    config: InferenceConfig
+
+    # -- what a backend provides --------------------------------------------------------------------------
+
+    def _run(self, windows: np.ndarray, body: np.ndarray | None, view: np.ndarray | None) -> np.ndarray:
+        """[N, 30, L] float32 -> [N, 30, L] float32 decoded with the codes ``body`` [Cb] and ``view`` [Cv]."""
+        raise NotImplementedError
+
+    def _encode_static(self, windows: np.ndarray, which: str) -> np.ndarray:
+        """[N, 30, L] float32 -> [N, C] float32 skeleton (``which="body"``) or view codes."""
+        raise NotImplementedError
+
+    # -- shared --------------------------------------------------------------------------------------------
+
+    @property
+    def variant(self) -> str:
+        return self.model.variant
+
+    @property
+    def min_frames(self) -> int:
+        """Shortest track (frames) the network takes."""
+        return self.model.min_frames
+
+    def reference_codes(
+        self,
+        track: PoseTrack,
+        view: PoseTrack | None = None,
+        *,
+        name: str = "reference track",
+        view_name: str = "view track",
+    ) -> ReferenceCodes:
+        """Skeleton code, view code and placement of a reference person.
+
+        Args:
+            track: the reference (any layout convertible to body15); gives the skeleton, the placement,
+                the pixel space of retargeted tracks and, unless ``view`` is given, the view.
+            view: optional second track whose view code is used instead.
+            name: how error messages call ``track`` (e.g. its file).
+            view_name: how error messages call ``view``.
+
+        Raises:
+            InputError: see :meth:`retarget` for the conditions.
+        """
+        x, prepared = self._prepare(track, name)  # [30, T]
+        config = self.model.config
+        body = self._static_code(x, "body") if config.body_channels is not None else None
+        view_code = None
+        if config.view_channels is not None:
+            view_code = self._static_code(x if view is None else self._prepare(view, view_name)[0], "view")
+        placement = placement_of(prepared.body15, name)
+        return ReferenceCodes(body, view_code, placement, track.image_size, prepared.scale)
+
+    def retarget(self, motion: PoseTrack, reference: ReferenceCodes, *, name: str = "motion track") -> PoseTrack:
+        """The motion of ``motion`` performed by the reference person, in the reference's pixels.
+
+        Args:
+            motion: driver track, any layout convertible to body15, any length >= :attr:`min_frames`.
+            reference: from :meth:`reference_codes` of a track with the same network.
+            name: how error messages call ``motion`` (e.g. its file).
+
+        Returns:
+            body15 track with ``len(motion)`` frames, the driver's fps and the reference's image size;
+            every joint present (confidence 1). Its size comes from the skeleton code; a network without
+            a skeleton encoder keeps the driver's skeleton at the share of the frame height it had.
+
+        Raises:
+            InputError: too short a track, a layout that cannot give body15, no joints at all or a joint
+                never detected, or reference codes from a different network.
+        """
+        self._check_reference(reference)
+        return self.retarget_prepared([self.prepare_motion(motion, name)], reference)[0]
+
+    def retarget_many(
+        self, motions: Sequence[PoseTrack], reference: ReferenceCodes, names: Sequence[str] | None = None
+    ) -> list[PoseTrack]:
+        """:meth:`retarget` of many tracks, their windows stacked through the network together.
+
+        Every track is checked (and prepared) before the network runs, so a bad one raises before any work.
+
+        Args:
+            motions: driver tracks.
+            reference: as for :meth:`retarget`.
+            names: how error messages call each track (default "motion track i").
+        """
+        self._check_reference(reference)
+        names = list(names) if names is not None else [f"motion track {i}" for i in range(len(motions))]
+        return self.retarget_prepared([self.prepare_motion(m, n) for m, n in zip(motions, names)], reference)
+
+    def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> PreparedMotion:
+        """The network input of a driver track (:meth:`retarget` raises what this raises)."""
+        return PreparedMotion(self._prepare(motion, name)[0], float(motion.fps), name)
+
+    def retarget_prepared(self, motions: Sequence[PreparedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
+        """Retarget prepared driver tracks (:meth:`prepare_motion`): windows of all of them go through the
+        network together, ``config.batch * config.window`` frames at a time."""
+        self._check_reference(reference)
+        scale = self._reference_scale(reference)
+        body, view = (None if c is None else np.asarray(c, np.float32) for c in (reference.body, reference.view))
+        outputs = run_windowed(
+            [m.x for m in motions], lambda windows: self._run(windows, body, view), self.model.config.downsampling,
+            self.config.window, self.config.overlap, self.config.batch * self.config.window,
+        )  # fmt: skip
+        return [self._finish(y, m.fps, reference, scale) for y, m in zip(outputs, motions)]
+
+    def _finish(self, y: np.ndarray, fps: float, reference: ReferenceCodes, scale: float) -> PoseTrack:
+        """[30, T] network output -> body15 track in the reference's pixels."""
+        joints = channels_to_joints(y.astype(np.float64)[None], self.stats)[0] / scale  # [T, 15, 2] reference pixels
+        joints = place(smooth_joints(joints, self.preprocess.output_sigma), reference.placement)
+        return body15_track(joints, fps, reference.image_size)
+
+    def _static_code(self, x: np.ndarray, which: str) -> np.ndarray:
+        """[30, T] -> [C] mean code over windows of ``code_window`` frames."""
+        length, window = x.shape[-1], self.config.code_window
+        if length < window:
+            windows = pad_to_multiple(x, 8)[0][None]  # [1, 30, T8]
+        else:
+            starts = list(range(0, length - window + 1, self.config.code_stride))
+            if starts[-1] != length - window:
+                starts.append(length - window)
+            windows = np.stack([x[:, s : s + window] for s in starts])  # [N, 30, window]
+        batch = self.config.batch
+        codes = np.concatenate([self._encode_static(windows[i : i + batch], which)
+                                for i in range(0, len(windows), batch)])  # fmt: skip  # [N, C]
+        return codes.mean(axis=0).astype(np.float32)
+
+    def _reference_scale(self, reference: ReferenceCodes) -> float:
+        if reference.scale is not None:
+            return reference.scale
+        if self.preprocess.body_height > 0:
+            raise InputError(
+                "reference codes: written by an older clone2d without the reference's scale; recompute them"
+                " (run `clone train-ref` again)"
+            )
+        return canvas_scale(reference.image_size, self.preprocess)
+
+    def _check_reference(self, reference: ReferenceCodes) -> None:
+        for name, code, dim in (
+            ("skeleton", reference.body, self.model.config.body_dim),
+            ("view", reference.view, self.model.config.view_dim),
+        ):
+            size = 0 if code is None else int(np.asarray(code).size)
+            if size != dim:
+                raise InputError(
+                    f"reference codes: {name} code of size {size}, this {self.variant} network uses {dim};"
+                    " they come from a different retargeting model"
+                )
+
+    def _prepare(self, track: PoseTrack, name: str) -> tuple[np.ndarray, PreparedTrack]:
+        """The network input [30, T] float32 of a real track, and the track as prepared for it."""
+        if len(track) < self.min_frames:
+            raise InputError(
+                f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
+            )
+        prepared = prepare(track, self.preprocess, name)
+        x = joints_to_channels(prepared.canvas[None], self.stats)[0]  # [30, T] float64
+        return np.ascontiguousarray(x, dtype=np.float32), prepared

@@ -1,0 +1,93 @@
+"""The numpy backend retargets as the torch one does, one track or many at once (packaged weights)."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+
+import numpy as np
+import pytest
+import torch
+
+from pose_io.errors import InputError
+from retarget.api import InferenceConfig, NumpyRetargeter, Retargeter, load_retargeter
+from tests.figures import tall_and_small, walking_figure
+
+PX = 2e-3  # pixels; measured ~1e-4 (float32 rounding of 500-pixel coordinates)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_thread():
+    from retarget.blas import blas_threads, set_blas_threads
+
+    threads, blas = torch.get_num_threads(), blas_threads()
+    torch.set_num_threads(1)
+    set_blas_threads(1)
+    yield
+    torch.set_num_threads(threads)
+    if blas is not None:
+        set_blas_threads(blas)
+
+
+@pytest.fixture(scope="module")
+def backends() -> tuple[Retargeter, NumpyRetargeter]:
+    small = InferenceConfig(window=128, overlap=32, batch=2)  # long tracks cross several windows
+    return load_retargeter(config=small), load_retargeter(config=small, backend="numpy")
+
+
+@pytest.fixture(scope="module")
+def people():
+    return tall_and_small(96)
+
+
+def test_reference_codes_agree(backends, people):
+    codes = [b.reference_codes(people["tall"], people["small"]) for b in backends]
+    np.testing.assert_allclose(codes[0].body, codes[1].body, atol=1e-5)
+    np.testing.assert_allclose(codes[0].view, codes[1].view, atol=1e-5)
+    assert codes[0].placement == codes[1].placement and codes[0].scale == codes[1].scale
+
+
+@pytest.mark.parametrize("frames", [16, 45, 96, 300])
+def test_retargeted_poses_agree(backends, people, frames):
+    reference = backends[0].reference_codes(people["small"])
+    driver = walking_figure(frames, seed=frames)
+    a, b = (r.retarget(driver, reference) for r in backends)
+    assert a.equals(b, atol=PX)
+
+
+def test_many_clips_at_once_equal_one_at_a_time(backends, people):
+    numpy_backend = backends[1]
+    reference = numpy_backend.reference_codes(people["small"])
+    drivers = [walking_figure(n, seed=n) for n in (40, 96, 96, 300, 17)]
+    many = numpy_backend.retarget_many(drivers, reference)
+    assert [len(m) for m in many] == [len(d) for d in drivers]
+    for driver, moved in zip(drivers, many):
+        assert moved.equals(numpy_backend.retarget(driver, reference), atol=PX)
+    torch_many = backends[0].retarget_many(drivers, reference)
+    assert all(a.equals(b, atol=PX) for a, b in zip(many, torch_many))
+
+
+def test_a_bad_clip_among_many_is_named_before_any_work(backends, people):
+    numpy_backend = backends[1]
+    reference = numpy_backend.reference_codes(people["small"])
+    too_short = walking_figure(4, seed=0)
+    with pytest.raises(InputError, match="clip 2: 4 frames"):
+        numpy_backend.retarget_many([walking_figure(40), walking_figure(50), too_short], reference,
+                                    names=["clip 0", "clip 1", "clip 2"])  # fmt: skip
+
+
+def test_codes_of_another_network_are_refused(backends, people):
+    reference = backends[1].reference_codes(people["small"])
+    wrong = dataclasses.replace(reference, body=np.zeros(3, np.float32))
+    with pytest.raises(InputError, match="skeleton code of size 3"):
+        backends[1].retarget(people["tall"], wrong)
+
+
+def test_numpy_backend_modules_import_without_torch():
+    import subprocess
+
+    code = ("import sys; import retarget.api, retarget.batch, retarget.numpy_weights, retarget.inference, "
+            "retarget.runtime, retarget.blas, pose_io, pose_io.readers, pose_io.writers; "
+            "retarget.api.load_retargeter(backend='auto'); print('torch' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False", out.stderr
