@@ -13,6 +13,14 @@ class Method(str, Enum):
     NONE = "none"
 
 
+class StageMode(str, Enum):
+    """Where a driven track may go (``clone drive --stage``): kept on the floor the ``reference`` stood on in its
+    video (:mod:`clone.stage`), or its ``raw`` trajectory as the method gave it."""
+
+    REFERENCE = "reference"
+    RAW = "raw"
+
+
 class CanvasMode(str, Enum):
     """Where the generator's canvas sits: a square ``crop`` around the performer or the ``full`` frame letterboxed."""
 

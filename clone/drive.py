@@ -5,7 +5,8 @@
    - ``retarget``: the retargeting network, with the reference's skeleton and view codes stored in the model
      (recomputed from the stored reference track when other weights are given);
    - ``global-scale``: Everybody Dance Now's per-frame scale and translation between feet positions;
-   - ``none``: the driver's pixel coordinates as they are, read as the reference's.
+   - ``none``: the driver's pixel coordinates as they are, read as the reference's;
+   then, for the first two, kept on the part of the frame the reference stood on (``--stage``, :mod:`clone.stage`).
 3. Draw each frame's pose map on the reference's canvas and run the generator frame after frame, each frame
    conditioned on the one it generated before (the first on zeros, as in training).
 4. Write an H.264 mp4 at the driver's fps, one frame at a time: memory does not grow with the track.
@@ -25,9 +26,10 @@ import numpy as np
 import torch
 
 from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
-from clone.choices import Method
+from clone.choices import Method, StageMode
 from clone.networks import generator_input
 from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
+from clone.stage import StageFit, fit_to_stage
 from clone.tensors import to_images, to_tensor
 from pose_io.atomic import check_new_output
 from pose_io.errors import InputError
@@ -39,6 +41,7 @@ log = logging.getLogger(__name__)
 
 
 METHODS = tuple(m.value for m in Method)
+STAGES = tuple(s.value for s in StageMode)
 DEFAULT_MODEL = "ref_model.pt"
 
 
@@ -53,6 +56,7 @@ class DriveResult:
     method: str
     poses_out: Path | None
     seconds: float
+    stage_share: float = 0.0  # share of frames that were off the reference's stage and moved onto it
 
 
 def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
@@ -121,21 +125,51 @@ def global_scale_onto(driver: PoseTrack, model: ReferenceModel) -> PoseTrack:
     return driver.replace(joints=joints, image_size=model.canvas.image_size)
 
 
-def move_onto_reference(
-    driver: PoseTrack, model: ReferenceModel, method: str, weights: str | os.PathLike | None = None,
-    device: str = "cpu",
-) -> PoseTrack:
-    """The driver's poses in the reference's pixels, by ``method`` (one of :data:`METHODS`)."""
-    if method == "retarget":
-        return retarget_onto(driver, model, weights, device)
-    if method == "global-scale":
-        return global_scale_onto(driver, model)
-    if method == "none":
+def drive_poses(
+    driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
+    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE,
+) -> tuple[PoseTrack, StageFit | None]:
+    """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
+
+    Args:
+        driver: the driver's track.
+        model: the reference model.
+        method: one of :data:`METHODS`.
+        weights: retargeting weights (see :func:`retargeting_weights`).
+        device: where the retargeting network runs.
+        stage: one of :data:`STAGES`: ``reference`` keeps the ``retarget`` and ``global-scale`` results on the
+            part of the frame the reference occupied (:func:`clone.stage.fit_to_stage`); ``raw`` does not.
+
+    Returns:
+        ``(track, fit)``; ``fit`` is None when the stage was not applied (``raw``, or ``--method none``).
+    """
+    try:
+        method, stage = Method(method), StageMode(stage)
+    except ValueError:
+        if method not in METHODS:
+            raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}") from None
+        raise InputError(f"unknown --stage {stage!r}; valid: {', '.join(STAGES)}") from None
+    if method is Method.NONE:
         if driver.image_size != model.canvas.image_size:
             log.warning("driver frames are %dx%d, the reference's %dx%d; --method none uses the coordinates "
                         "as they are", *driver.image_size, *model.canvas.image_size)
-        return driver.replace(image_size=model.canvas.image_size)
-    raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}")
+        return driver.replace(image_size=model.canvas.image_size), None
+    if method is Method.RETARGET:
+        driven = retarget_onto(driver, model, weights, device)
+    else:
+        driven = global_scale_onto(driver, model)
+    if stage is StageMode.RAW:
+        return driven, None
+    return fit_to_stage(driven, model.reference_track)
+
+
+def move_onto_reference(
+    driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
+    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE,
+) -> PoseTrack:
+    """The driver's poses in the reference's pixels (see :func:`drive_poses`, which also says how far they
+    were moved to stay on the reference's stage)."""
+    return drive_poses(driver, model, method, weights, device, stage)[0]
 
 
 # ------------------------------------------------------------------------------------------------ frames
@@ -209,6 +243,7 @@ def drive(
     *,
     model_path: str | os.PathLike = DEFAULT_MODEL,
     method: Method | str = Method.RETARGET,
+    stage: StageMode | str = StageMode.REFERENCE,
     poses_out: str | os.PathLike | None = None,
     side_by_side: bool = False,
     device: torch.device | str = "cpu",
@@ -224,6 +259,8 @@ def drive(
         out: the ``.mp4`` to write (H.264, yuv420p, the driver's fps).
         model_path: the reference model from ``clone train-ref``.
         method: ``retarget``, ``global-scale`` or ``none``.
+        stage: ``reference``: keep the driven track on the part of the frame the reference occupied; ``raw``:
+            as the method left it (see :func:`drive_poses`).
         poses_out: also write the driven poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
         side_by_side: frames show driver skeleton | driven skeleton | result.
         device: where the networks run.
@@ -244,12 +281,16 @@ def drive(
         method = Method(method).value  # the plain name from here on: it ends in DriveResult
     except ValueError:
         raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}") from None
+    try:
+        stage = StageMode(stage).value
+    except ValueError:
+        raise InputError(f"unknown --stage {stage!r}; valid: {', '.join(STAGES)}") from None
     if max_gap < 0:
         raise InputError(f"--max-gap must be >= 0, got {max_gap}")
     check_new_output(out, overwrite)
     model = load_reference_model(model_path)
     driver = read_driver(driver_path, max_gap)
-    driven = move_onto_reference(driver, model, method, weights, str(device))
+    driven, fit = drive_poses(driver, model, method, weights, str(device), stage)
     poses_path = Path(poses_out) if poses_out is not None else None
     if poses_path is not None:
         check_poses_out(driven, poses_path, overwrite)
@@ -267,4 +308,4 @@ def drive(
         write_track(driven, poses_path, overwrite=overwrite)
     width = model.canvas.size * (3 if side_by_side else 1)
     return DriveResult(out, total, driven.fps, (width, model.canvas.size), method, poses_path,
-                       time.perf_counter() - t0)
+                       time.perf_counter() - t0, 0.0 if fit is None else fit.share)

@@ -40,6 +40,7 @@ def _from(library: type[Enum]) -> type[Choice]:
 
 
 Method = _from(choices.Method)
+StageMode = _from(choices.StageMode)
 CanvasMode = _from(choices.CanvasMode)
 Align = _from(choices.Align)
 Variant = _from(retarget_choices.Variant)

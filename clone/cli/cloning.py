@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.choices import Align, CanvasMode, Method
+from clone.cli.choices import Align, CanvasMode, Method, StageMode
 from clone.cli.common import DEVICE_HELP, console, resolve_device_option, training_device, user_errors
 from pose_io.errors import InputError
 
@@ -147,6 +147,11 @@ def drive(
         "--method", parser=Method,
         help="retarget: the network; global-scale: Everybody Dance Now's scaling; none: the driver's pixels.")
     ] = Method.RETARGET,
+    stage: Annotated[StageMode, typer.Option(
+        "--stage", parser=StageMode,
+        help="reference: keep the driven poses on the part of the frame the reference stood on; raw: as the "
+        "method left them.")
+    ] = StageMode.REFERENCE,
     poses_out: Annotated[Path | None, typer.Option(
         "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv.")] = None,
     side_by_side: Annotated[bool, typer.Option(
@@ -177,11 +182,15 @@ def drive(
                   console=console, transient=True) as bar:
         task = bar.add_task("drive", total=None)
         result = run_drive(
-            drive_poses, out, model_path=model, method=method.value, poses_out=poses_out, side_by_side=side_by_side,
+            drive_poses, out, model_path=model, method=method.value, stage=stage.value, poses_out=poses_out,
+            side_by_side=side_by_side,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )
     console.print(f"wrote {result.out}: {result.frames} frames {result.size[0]}x{result.size[1]} at "
                   f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)")
+    if result.stage_share > 0:
+        console.print(f"kept on the reference's stage: {100 * result.stage_share:.1f}% of frames were off it "
+                      "(--stage raw keeps them there)")
     if result.poses_out is not None:
         console.print(f"wrote {result.poses_out}")

@@ -10,6 +10,7 @@ from typing import Annotated
 
 import typer
 
+from clone.cli.choices import StageMode
 from clone.cli.common import DEVICE_HELP, console, user_errors
 
 _HEADLINE = ("limb_error_pct", "foot_slide_pct", "jitter_pct", "pose_mse", "pck_0.1", "ssim", "psnr")
@@ -40,6 +41,14 @@ def report_command(
             "--weights", help="Retargeting weights (default: the shipped ones, else those the model was made with)."
         ),
     ] = None,
+    stage: Annotated[
+        StageMode,
+        typer.Option(
+            "--stage", parser=StageMode,
+            help="reference: keep the driven poses on the part of the frame the reference stood on; raw: as "
+            "each method left them.",
+        ),
+    ] = StageMode.REFERENCE,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -67,6 +76,7 @@ def report_command(
         run = make_report(
             drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
             device=dev, weights=weights, progress=lambda done, total: bar.update(task, completed=done, total=total),
+            stage=stage.value,
         )  # fmt: skip
     table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")
     table.add_column("measure")

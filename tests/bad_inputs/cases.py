@@ -138,6 +138,21 @@ options("retarget apply", APPLY, [b.poses_npz], {"--size": ["0x0", "axb"], "--de
 models("retarget apply", APPLY, [b.poses_npz], "--weights")
 pose_inputs("retarget apply", ["retarget", "apply"], APPLY[3:], [b.poses_npz])
 paths("retarget apply", APPLY, [b.poses_npz, b.bad_npz], "--view", ["{t}/missing.npz", "{t}/bad.npz"])
+options("retarget apply", APPLY, [b.poses_npz], {"--backend": ["bogus", ""], "--to": ["csv", "bogus"],
+                                                 "--threads": ["0", "nan"]})
+add("retarget apply --backend numpy on cuda", [*APPLY, "--backend", "numpy", "--device", "cuda"], [b.poses_npz])
+# Several inputs (a folder of clips, or more than one path): every input is checked before any output is written.
+BATCH = ["retarget", "apply", "{t}/clips", "--skeleton", "{t}/poses.npz", "--out", "{t}/moved", "--device", "cpu"]
+add("retarget apply batch with a corrupt clip", BATCH, [b.poses_npz, b.clips_bad])
+add("retarget apply batch with a missing input", ["retarget", "apply", "{t}/clips/a.npz", "{t}/missing.npz",
+                                                  *BATCH[3:]], [b.poses_npz, b.clips])
+add("retarget apply batch input named twice", ["retarget", "apply", "{t}/clips", "{t}/clips/a.npz", *BATCH[3:]],
+    [b.poses_npz, b.clips])
+add("retarget apply batch outputs clash", BATCH, [b.poses_npz, b.clips_clash])
+add("retarget apply batch output exists", BATCH, [b.poses_npz, b.clips, b.old_batch_output])
+add("retarget apply batch --preview", [*BATCH, "--preview", "{t}/p.mp4"], [b.poses_npz, b.clips])
+paths("retarget apply batch", BATCH[:5], [b.poses_npz, b.clips, *EVERY_OUTPUT], "--out",
+      ["{t}/old.npz", "{t}/o.npz", "{t}/blocker/o", "/proc/o"])
 
 TRAIN = ["retarget", "train", "--mocap", "{t}/mocap", "--out", "{t}/new.pt", "--device", "cpu"]
 options("retarget train", TRAIN, [b.mocap_empty], {
@@ -205,6 +220,7 @@ models("drive", DRIVE, [b.poses_npz], "--model")
 add("drive default model missing", DRIVE, [b.poses_npz])
 options("drive", [*DRIVE, "--model", "{t}/garbage.pt"], [b.poses_npz, b.garbage_pt], {
     "--max-gap": ["-1", "99999999999"], "--threads": ["0"], "--method": ["bogus"], "--device": ["tpu"],
+    "--stage": ["bogus", "RAW", ""],
 })
 paths("drive", DRIVE[:2], [b.poses_npz, *EVERY_OUTPUT], "--out",
       ["{t}/result", "{t}/out.avi", "{t}/old.mp4", "{t}/folder.mp4", "{t}/blocker/o.mp4", "/proc/o.mp4"])
@@ -220,7 +236,8 @@ paths("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_
       ["{t}/missing.npz"])
 paths("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_pt], "--gt-frames",
       ["{t}/missing_frames"])
-options("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_pt], {"--device": ["bogus"]})
+options("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_pt],
+        {"--device": ["bogus"], "--stage": ["bogus", ""]})
 add("report missing driver", ["report", "{t}/missing.npz", "--out", "{t}/rep", "--model", "{t}/foreign.pt"],
     [b.foreign_pt])
 

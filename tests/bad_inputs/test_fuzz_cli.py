@@ -30,7 +30,7 @@ COMMANDS = {
                   ["--size", "--steps", "--minutes", "--batch-size", "--threads", "--canvas", "--align"],
                   [b.poses_npz]),
     "drive": (["drive", "{t}/poses.npz", "--out", "{t}/o.mp4", "--model", "{t}/foreign.pt", "--device", "cpu"],
-              ["--max-gap", "--threads", "--method", "--poses-out"], [b.poses_npz, b.foreign_pt]),
+              ["--max-gap", "--threads", "--method", "--stage", "--poses-out"], [b.poses_npz, b.foreign_pt]),
 }
 
 numbers = st.one_of(

@@ -12,8 +12,10 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.drive import generate_frames, move_onto_reference
+from clone.drive import drive_poses, generate_frames, move_onto_reference
 from clone.reference_model import file_sha256, load_reference_model
+from clone.stage import reference_stage
+from pose_io.errors import InputError
 from pose_io.readers import read_track
 from pose_io.writers import write_track
 from retarget import api as retarget_api
@@ -209,3 +211,44 @@ def test_interleaved_generation_streams_leave_autograd_alone(trained):
         assert torch.is_grad_enabled() and not torch.is_inference_mode_enabled()
         assert np.array_equal(a[1], b[1])
     assert torch.is_grad_enabled()
+
+
+def test_stage_keeps_the_driven_poses_where_the_reference_stood_unless_raw(trained, driver, tmp_path):
+    # The driver's sideways sway, scaled onto the reference, is wider than the reference's own.
+    model = load_reference_model(trained)
+    stage = reference_stage(model.reference_track)
+    runs = {}
+    for mode in ("reference", "raw"):
+        out, poses = tmp_path / f"{mode}.mp4", tmp_path / f"{mode}.npz"
+        args = drive_args(driver, out, trained, "--method", "global-scale", "--stage", mode,
+                          "--poses-out", str(poses))
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 0, result.output
+        assert len(read_video(out)[0]) == 30
+        runs[mode] = (result.output, read_track(poses))
+    (said, kept), (said_raw, raw) = runs["reference"], runs["raw"]
+    assert "kept on the reference's stage" in said and "kept on" not in said_raw
+    root_x = kept.joint("mid_hip")[:, 0]
+    low, high = stage.x_range[0] - stage.margin, stage.x_range[1] + stage.margin
+    assert low - 1e-3 <= root_x.min() and root_x.max() <= high + 1e-3
+    raw_x = raw.joint("mid_hip")[:, 0]
+    assert raw_x.min() < low or raw_x.max() > high  # without the stage it walks off
+    # The raw poses are the library's; the kept ones are them moved by one map, with the share reported.
+    driven = read_track(driver).to_layout("body15")
+    np.testing.assert_allclose(raw.joints, move_onto_reference(driven, model, "global-scale", stage="raw").joints,
+                               atol=1e-3)
+    track, fit = drive_poses(driven, model, "global-scale")
+    assert fit is not None and fit.moved and f"{100 * fit.share:.1f}% of frames" in said
+    np.testing.assert_allclose(kept.joints, track.joints, atol=1e-3)
+    assert drive_poses(driven, model, "none")[1] is None
+    assert drive_poses(driven, model, "global-scale", stage="raw")[1] is None
+
+
+def test_bad_stage_is_one_line_error(trained, driver, tmp_path):
+    out = tmp_path / "o.mp4"
+    line = one_line_error(CliRunner().invoke(app, drive_args(driver, out, trained, "--stage", "floor")))
+    assert "--stage" in line and "valid: reference, raw" in line
+    assert not out.exists()
+    model = load_reference_model(trained)
+    with pytest.raises(InputError, match="valid: reference, raw"):
+        drive_poses(read_track(driver), model, "global-scale", stage="floor")

@@ -21,6 +21,8 @@ WIDE = {"COLUMNS": "200"}  # rich would cut long choice lists at the default 80 
 # value is the only problem.
 CHOICE_OPTIONS = [
     (["drive", "{tmp}/drv", "--out", "{tmp}/o.mp4"], "--method", choices.Method),
+    (["drive", "{tmp}/drv", "--out", "{tmp}/o.mp4"], "--stage", choices.StageMode),
+    (["report", "{tmp}/drv", "--out", "{tmp}/rep"], "--stage", choices.StageMode),
     (["train-ref", "{tmp}/poses", "{tmp}/frames", "--out", "{tmp}/m.pt"], "--canvas", choices.CanvasMode),
     (["train-ref", "{tmp}/poses", "{tmp}/frames", "--out", "{tmp}/m.pt"], "--align", choices.Align),
     (["retarget", "train", "--mocap", "{tmp}/mocap", "--out", "{tmp}/r.pt"], "--variant", choices.Variant),
