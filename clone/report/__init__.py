@@ -16,12 +16,14 @@ An existing folder is replaced only when it carries the marker and the caller pa
 Modules, one job each: ``results`` (what is compared, file names, colours, number formatting), ``folder``
 (the output folder rules), ``panels`` (images and stills), ``plots`` (matplotlib figures), ``document``
 (metrics.json), ``page`` (report.html), ``write`` (a report from measured results), ``ground_truth``
-(reading and checking it) and ``run`` (``make_report``: `clone report` end to end).
+(reading and checking it), ``run`` (``make_report``: `clone report` end to end) and ``overview`` (one page over
+several report folders, with a summary table across them: what `clone demo` writes above its pairs).
 """
 
 from clone.report.document import METRICS_FORMAT, METRICS_VERSION, metrics_document
 from clone.report.folder import MARKER, check_report_dir, report_dir
 from clone.report.ground_truth import open_gt_frames, read_gt_poses
+from clone.report.overview import PairSection, read_section, render_overview, write_overview
 from clone.report.page import render_page
 from clone.report.panels import caption_height, overlay, pose_panel, side_by_side, still_indices, write_stills
 from clone.report.plots import plot_curves, plot_summary
@@ -53,6 +55,7 @@ __all__ = [
     "DriverInfo",
     "GroundTruth",
     "MethodResult",
+    "PairSection",
     "ReportRun",
     "best_methods",
     "caption_height",
@@ -66,10 +69,13 @@ __all__ = [
     "plot_summary",
     "pose_panel",
     "read_gt_poses",
+    "read_section",
+    "render_overview",
     "render_page",
     "report_dir",
     "side_by_side",
     "still_indices",
+    "write_overview",
     "write_report",
     "write_report_files",
     "write_stills",

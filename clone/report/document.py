@@ -19,7 +19,9 @@ from clone.metrics import METRICS, Scores
 from clone.report.results import DriverInfo, GroundTruth, MethodResult
 
 METRICS_FORMAT = "clone2d-report-metrics"
-METRICS_VERSION = 1
+# 2: the pose error, the paper's MSE and PCK compare MidHip-aligned poses (placement is its own measure,
+# root_rmse_pct); facing_share and stage_share are new.
+METRICS_VERSION = 2
 
 _NOTES = (
     "per_frame arrays have one value per driver frame; null = no value in that frame (e.g. no ankle in "

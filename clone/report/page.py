@@ -22,7 +22,7 @@ from clone.report.results import (
     summary_keys,
 )
 
-_CSS = """
+CSS = """
 body{font:15px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0;background:#f4f5f7;color:#1d2330}
 main{max-width:1180px;margin:0 auto;padding:20px 28px 40px}
 h1{font-size:24px;margin:6px 0 2px}h2{font-size:18px;margin:28px 0 10px;border-bottom:1px solid #d8dbe2;padding-bottom:4px}
@@ -205,7 +205,7 @@ def render_page(
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{title}</title><style>{_CSS}</style></head><body><main>",
+        f"<title>{title}</title><style>{CSS}</style></head><body><main>",
         f"<h1>{title}</h1>",
         f'<p class="sub">{escape(" vs ".join(labels))} · generated {stamp} by clone2d</p>',
         _compared_section(methods, driver, gt),

@@ -111,15 +111,24 @@ def format_value(value: float | None, scale: float = 1.0) -> str:
 
 
 def best_methods(methods: Mapping[str, MethodResult], key: str) -> set[str]:
-    """The methods with the better value of summary ``key``.
+    """The methods with the better value of summary ``key`` (see :func:`best_of`)."""
+    return best_of({n: m.scores.summary.get(key, float("nan")) for n, m in methods.items()}, key)
 
-    Empty when all are equal, fewer than two have a value, or the measure has no better direction.
+
+def best_of(values: Mapping[str, float | None], key: str) -> set[str]:
+    """The names whose value of measure ``key`` is the better one.
+
+    Args:
+        values: name -> value (None or NaN: no value).
+        key: a key of ``clone.metrics.METRICS``, which says which direction is better.
+
+    Returns:
+        Empty when all are equal, fewer than two have a value, or the measure has no better direction.
     """
     better = METRICS[key].better
     if better is None:
         return set()
-    values = {n: m.scores.summary.get(key, float("nan")) for n, m in methods.items()}
-    values = {n: v for n, v in values.items() if not math.isnan(v)}
+    values = {n: float(v) for n, v in values.items() if v is not None and not math.isnan(float(v))}
     if len(values) < 2 or len(set(values.values())) == 1:
         return set()
     target = min(values.values()) if better == "lower" else max(values.values())

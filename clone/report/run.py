@@ -117,7 +117,7 @@ def _write_video(
         path: the mp4 to write.
         model: the reference model.
         driver: the driver's poses.
-        driven: method -> the driver's poses moved onto the reference (``clone.drive.move_onto_reference``).
+        driven: method -> the driver's poses moved onto the reference (``clone.drive.drive_poses``).
         truth_frames: the true frames cut to the canvas (``cut_gt_frames``), or None.
         kept: receives the frame scores and stills.
         device: where the generator runs.
@@ -151,6 +151,7 @@ def _method_results(
     reference: tuple[np.ndarray, float],
     truth: PoseTrack | None,
     kept: _Kept,
+    shares: Mapping[str, float],
 ) -> dict[str, MethodResult]:
     """Every method measured, with its stills and its poses in the stills' (canvas) pixels.
 
@@ -160,6 +161,8 @@ def _method_results(
         reference: the reference's [L] limb lengths and its height in pixels (``pose_io.measures``).
         truth: the ground-truth poses, or None.
         kept: the frame scores and stills of the video pass.
+        shares: method -> share of frames moved onto the reference's stage (``clone.stage.StageFit.share``);
+            methods the stage was not applied to are missing.
     """
     at = sorted(kept.at)
     methods = {}
@@ -167,6 +170,8 @@ def _method_results(
         scores = evaluate_track(track, *reference, truth)
         if m in kept.scorers:
             scores = scores.merged(kept.scorers[m].scores())
+        if m in shares:
+            scores = scores.merged(Scores(summary={"stage_share": float(shares[m])}))
         still_poses = dict(zip(at, image_to_canvas(track.joints[at], model.canvas)))  # t -> [J, 2] canvas px
         label, description = REPORT_METHODS[m]
         methods[m] = MethodResult(label, track, scores, kept.stills[m], still_poses, description)
@@ -220,6 +225,7 @@ def make_report(
     weights: str | os.PathLike | None = None,
     max_gap: int = 5,
     progress: Callable[[int, int], None] | None = None,
+    stage: str = "reference",
 ) -> ReportRun:
     """Drive the reference model with both methods, measure them and write the report folder.
 
@@ -234,11 +240,12 @@ def make_report(
         weights: retargeting weights (default: see ``clone.drive.retargeting_weights``).
         max_gap: fill driver gaps of at most this many frames.
         progress: called with (frames done, total) after every frame.
+        stage: ``reference`` or ``raw`` (see ``clone.drive.drive_poses``).
 
     Returns:
         Where the page is and the summary numbers.
     """
-    from clone.drive import move_onto_reference, read_driver  # torch loads only when a report is made
+    from clone.drive import drive_poses, read_driver  # torch loads only when a report is made
     from clone.reference_model import load_reference_model
 
     t0 = time.perf_counter()
@@ -252,17 +259,19 @@ def make_report(
     truth_frames = None if gt_frames is None else open_gt_frames(gt_frames, total, canvas.image_size)
     ref = model.reference_track
     reference = (reference_limb_lengths(ref.joints, ref.layout), skeleton_height(ref.joints, ref.layout))
-    driven = {m: move_onto_reference(driver, model, m, weights, device) for m in REPORT_METHODS}
+    moved = {m: drive_poses(driver, model, m, weights, device, stage) for m in REPORT_METHODS}
+    driven = {m: track for m, (track, _fit) in moved.items()}
+    shares = {m: fit.share for m, (_track, fit) in moved.items() if fit is not None}
     truth_canvas = None if truth is None else image_to_canvas(truth.joints, canvas)  # [T, J, 2] canvas px
     scorers = {m: FrameScorer(truth_canvas) for m in driven} if truth_frames is not None else {}
     kept = _Kept(set(still_indices(total)), scorers, {m: {} for m in driven})
 
-    with report_dir(out_dir, overwrite) as stage:
+    with report_dir(out_dir, overwrite) as folder:
         cut = None if truth_frames is None else cut_gt_frames(truth_frames, gt_frames, total, canvas)
-        _write_video(stage / VIDEO, model, driver, driven, cut, kept, device, progress)
-        methods = _method_results(driven, model, reference, truth, kept)
+        _write_video(folder / VIDEO, model, driver, driven, cut, kept, device, progress)
+        methods = _method_results(driven, model, reference, truth, kept, shares)
         gt_info = _ground_truth_info(gt_poses, gt_frames, truth_canvas, kept.gt_stills)
         info = DriverInfo(driver, str(driver_path), str(model_path), _driver_baseline(driver))
-        write_report_files(stage, methods, info, gt_info, VIDEO)
+        write_report_files(folder, methods, info, gt_info, VIDEO)
     summary = {m: dict(r.scores.summary) for m, r in methods.items()}
     return ReportRun(out_dir / PAGE, total, summary, time.perf_counter() - t0)

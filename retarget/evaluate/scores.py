@@ -6,8 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pose_io.measures import amplitude_ratio, pose_error
-from retarget.preprocess import ROOT_INDEX
+from pose_io.measures import amplitude_ratio, pose_error, root_aligned
 
 METRICS: tuple[str, ...] = ("mse_x1e3", "rmse_pct", "pck_0.05", "pck_0.1", "amplitude")
 ALIGNMENTS: tuple[str, ...] = ("pose", "with_root", "placed")
@@ -39,18 +38,17 @@ def pose_errors(pred: np.ndarray, truth: np.ndarray, height: float) -> dict[str,
     }
 
 
-def root_aligned(joints: np.ndarray) -> np.ndarray:
-    """[T, 15, 2] body15 -> [T, 14, 2]: every other joint relative to the same frame's MidHip."""
-    return np.delete(joints - joints[:, ROOT_INDEX : ROOT_INDEX + 1], ROOT_INDEX, axis=1)
-
-
 def offset_aligned(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """[T, J, 2] ``pred`` moved by the one translation that brings it closest to ``truth`` (least squares)."""
     return pred + (truth - pred).reshape(-1, 2).mean(axis=0)
 
 
 def case_scores(pred: np.ndarray, truth: np.ndarray, height: float) -> CaseScores:
-    """:func:`pose_errors` of [T, 15, 2] body15 ``pred`` vs ``truth`` under every alignment of :data:`ALIGNMENTS`."""
+    """:func:`pose_errors` of [T, 15, 2] body15 ``pred`` vs ``truth`` under every alignment of :data:`ALIGNMENTS`.
+
+    "pose" compares the root-aligned poses (:func:`pose_io.measures.root_aligned`, MidHip subtracted and left
+    out), the same definition as the primary pose row of ``clone report``.
+    """
     return {
         "pose": pose_errors(root_aligned(pred), root_aligned(truth), height),
         "with_root": pose_errors(offset_aligned(pred, truth), truth, height),

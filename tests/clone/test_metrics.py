@@ -36,8 +36,10 @@ def test_self_comparison_is_perfect():
     assert scores.summary["outside_share"] == 0.0
     assert scores.summary["foot_slide_px"] == 0.0
     gt = metrics.gt_pose_scores(joints, joints, HEIGHT)
-    assert gt.summary == {"pose_mse": 0.0, "pose_rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0}
+    facing = gt.summary.pop("facing_share")
+    assert gt.summary == {"pose_mse": 0.0, "pose_rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0, "root_rmse_pct": 0.0}
     assert np.all(gt.per_frame["pck_0.1"] == 1.0)
+    assert math.isnan(facing)  # seen from the front: no side to face
 
 
 def test_uniform_scale_gives_known_limb_error():
@@ -125,19 +127,42 @@ def test_outside_share():
 def test_gt_pose_errors_known_values():
     gt = stand(4)
     pred = gt.copy()
-    pred[:, :, 0] += 0.06 * HEIGHT  # every joint 6 % of the height to the right
+    pred[:, :, 0] += 0.06 * HEIGHT  # every joint 6 % of the height to the right: the right pose, misplaced
     scores = metrics.gt_pose_scores(pred, gt, HEIGHT)
-    # MSE over both coordinates: (0.06² + 0²) / 2
-    assert scores.summary["pose_mse"] == pytest.approx(0.06**2 / 2)
-    assert scores.summary["pose_rmse_pct"] == pytest.approx(6.0)
-    assert scores.summary["pck_0.05"] == 0.0 and scores.summary["pck_0.1"] == 1.0
-    pred[0, :5] = gt[0, :5]  # first frame: 5 of 15 joints right
-    pred[1, 0] = np.nan  # a missing joint is left out
+    assert scores.summary["pose_rmse_pct"] == pytest.approx(0.0, abs=1e-12)
+    assert scores.summary["pose_mse"] == pytest.approx(0.0, abs=1e-12) and scores.summary["pck_0.05"] == 1.0
+    assert scores.summary["root_rmse_pct"] == pytest.approx(6.0)
+    np.testing.assert_allclose(scores.per_frame["root_rmse_pct"], 6.0)
+    legs = [BODY15.index(n) for n in ("r_knee", "r_ankle", "l_knee", "l_ankle")]
+    pred[:, legs, 1] += 0.06 * HEIGHT  # longer legs: 4 of the 14 MidHip-aligned joints 6 % off, in y
     scores = metrics.gt_pose_scores(pred, gt, HEIGHT)
-    assert scores.per_frame["pck_0.05"][0] == pytest.approx(5 / 15)
-    assert scores.summary["pck_0.05"] == pytest.approx(5 / 59)
+    assert scores.summary["pose_mse"] == pytest.approx(0.06**2 * 4 / 28)  # over joints and both coordinates
+    assert scores.summary["pose_rmse_pct"] == pytest.approx(6.0 * np.sqrt(4 / 14))
+    assert scores.summary["pck_0.05"] == pytest.approx(10 / 14) and scores.summary["pck_0.1"] == 1.0
+    pred[0, legs] = gt[0, legs] + [0.06 * HEIGHT, 0.0]  # first frame: the legs right again
+    pred[1, BODY15.index("nose")] = np.nan  # a missing joint is left out
+    scores = metrics.gt_pose_scores(pred, gt, HEIGHT)
+    assert scores.per_frame["pck_0.05"][0] == 1.0 and scores.per_frame["pck_0.05"][2] == pytest.approx(10 / 14)
+    assert scores.summary["pck_0.05"] == pytest.approx((14 + 9 + 10 + 10) / 55)
     with pytest.raises(InputError, match="does not match"):
         metrics.gt_pose_scores(pred[:3], gt, HEIGHT)
+    with pytest.raises(InputError, match="ground-truth poses: .*height must be positive"):
+        metrics.gt_pose_scores(pred, gt, 0.0)
+
+
+def test_gt_facing_share_counts_frames_facing_the_true_side():
+    gt = stand(4)
+    nose, neck = BODY15.index("nose"), BODY15.index("neck")
+    gt[:, nose, 0] = gt[:, neck, 0] - 0.04 * HEIGHT  # seen from its left: faces image-left
+    gt[3, nose, 0] = gt[3, neck, 0]  # frame 3 seen from the front: no side, left out
+    mirrored = gt.copy()
+    mirrored[:, nose, 0] = gt[:, neck, 0] + 0.04 * HEIGHT  # the other side
+    mirrored[0, nose, 0] = gt[0, nose, 0]  # ...except in frame 0
+    scores = metrics.gt_pose_scores(mirrored, gt, HEIGHT)
+    assert scores.summary["facing_share"] == pytest.approx(1 / 3)
+    np.testing.assert_array_equal(scores.per_frame["facing_share"][:3], [1.0, 0.0, 0.0])
+    assert np.isnan(scores.per_frame["facing_share"][3])
+    assert metrics.gt_pose_scores(gt, gt, HEIGHT).summary["facing_share"] == 1.0
 
 
 def test_person_box_margin_and_edges():
@@ -178,7 +203,12 @@ def test_evaluate_track_uses_fps_window_and_gt_layout():
     gt = PoseTrack(body25, np.isfinite(body25[..., 0]).astype(float), 30.0, (200, 240), "body25")
     scores = metrics.evaluate_track(track, measures.reference_limb_lengths(joints), HEIGHT, gt)
     assert scores.summary["pose_mse"] == 0.0 and scores.summary["limb_error_pct"] == 0.0
+    assert scores.summary["root_rmse_pct"] == 0.0
     assert set(metrics.METRICS) >= set(scores.summary)
+    shifted = track.replace(joints=joints + [HEIGHT * 0.1, 0.0])
+    moved = metrics.evaluate_track(shifted, measures.reference_limb_lengths(joints), HEIGHT, gt)
+    assert moved.summary["pose_rmse_pct"] == pytest.approx(0.0, abs=1e-9)  # placement is its own row
+    assert moved.summary["root_rmse_pct"] == pytest.approx(10.0)
     assert metrics.contact_window(30.0) == 31 and metrics.contact_window(25.0) == 25
     with pytest.raises(InputError, match="frames"):
         metrics.evaluate_track(track, measures.reference_limb_lengths(joints), HEIGHT, gt.frames(0, 10))

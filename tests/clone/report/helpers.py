@@ -43,7 +43,8 @@ def frame_of(joints: np.ndarray, size: int = SIZE) -> np.ndarray:
 def make_methods(
     frames: int = 12, with_frames: bool = True
 ) -> tuple[dict[str, MethodResult], DriverInfo, GroundTruth]:
-    """Two methods driving a figure: "global-scale" 3 px off the truth, "retarget" equal to it."""
+    """Two methods driving a figure: "global-scale" the truth moved 3 px to the right (the right pose in the wrong
+    place), "retarget" equal to it."""
     driver = walk(frames, 0.8)
     truth = walk(frames)
     ref = measures.reference_limb_lengths(truth.joints)

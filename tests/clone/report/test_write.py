@@ -36,9 +36,8 @@ def test_report_files_numbers_and_page(tmp_path):
     assert rt["summary"]["psnr"] == "inf" and rt["per_frame"]["psnr"] == ["inf"] * 12  # identical frames
     assert rt["per_frame"]["foot_slide_pct"][0] is None  # no slide before the first frame
     gs = doc["methods"]["global-scale"]
-    assert gs["summary"]["pose_rmse_pct"] == pytest.approx(
-        3.0 / measures.skeleton_height(walk(12).joints) * 100
-    )
+    assert gs["summary"]["root_rmse_pct"] == pytest.approx(3.0 / measures.skeleton_height(walk(12).joints) * 100)
+    assert gs["summary"]["pose_rmse_pct"] == pytest.approx(0.0, abs=1e-9)  # a shift is placement, not pose
     assert all(len(v) == 12 for v in gs["per_frame"].values())
     assert doc["metrics"]["pose_mse"]["display_scale"] == 1000.0
 
@@ -49,10 +48,10 @@ def test_report_files_numbers_and_page(tmp_path):
     assert all((out / ln).is_file() for ln in links)
     assert set(stills) | {"curves.png", "summary.png", "side_by_side.mp4", "metrics.json"} <= set(links)
     assert "<video controls muted loop playsinline" in page and "<script" not in page
-    # retargeted poses equal the truth: it holds the better pose error, highlighted; PSNR inf shown as ∞
-    row = re.search(r"Joint RMSE</td>(.*?)</tr>", page).group(1)
+    # retargeted poses equal the truth: it holds the better placement, highlighted; PSNR inf shown as ∞
+    row = re.search(r"Placement \(root error\)</td>(.*?)</tr>", page).group(1)
     cells = re.findall(r"<td([^>]*)>([^<]*)</td>", row)[1:]
-    assert cells[0] == ("", f"{gs['summary']['pose_rmse_pct']:.3g}") and cells[1] == (' class="best"', "0")
+    assert cells[0] == ("", f"{gs['summary']['root_rmse_pct']:.3g}") and cells[1] == (' class="best"', "0")
     assert re.search(r"PSNR \(frame\)</td>.*?<td class=\"best\">∞</td>", page)
     # per-limb breakdown: the shifted copy has the same limb lengths, so no limb has a better method
     limbs = re.search(r"Limb-length error per limb.*?</table>", page).group(0)
