@@ -181,7 +181,8 @@ def generate_frames(
     """Run the generator over a track in the reference's pixels.
 
     Pose maps are drawn and moved to the device ``chunk`` frames at a time; a temporal generator then runs
-    frame after frame on its own previous output, a non-temporal one on the whole chunk.
+    frame after frame on its own previous output, a non-temporal one on the whole chunk. A generator trained
+    with a background plate composites its frames over the plate stored in the model.
 
     Args:
         model: the reference model.
@@ -196,6 +197,7 @@ def generate_frames(
     net = model.build_generator(device)
     size, layout = model.canvas.size, track.joint_layout
     prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
+    plate = model.plate_tensor(device)  # [1, 3, S, S], or None for a model trained without one
     for start in range(0, track.num_frames, chunk):
         joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
         maps = np.stack([render_pose_map(j, size, layout) for j in joints])  # [C, S, S, 3]
@@ -206,11 +208,11 @@ def generate_frames(
             if model.temporal:
                 outs = []
                 for i in range(len(pose)):
-                    prev = net(generator_input(pose[i:i + 1], prev))  # [1, 3, S, S]
+                    prev = net(generator_input(pose[i:i + 1], prev), plate)  # [1, 3, S, S]
                     outs.append(prev)
                 frames = to_images(torch.cat(outs))
             else:
-                frames = to_images(net(pose))
+                frames = to_images(net(pose, plate))
         yield from zip(maps, frames)
 
 

@@ -5,6 +5,10 @@ previous frame (generated while driving, real while training), as in Everybody D
 judges a consecutive pair of frames conditioned on both pose maps, so it can punish flicker as well as
 unrealistic frames.
 
+With a background plate (:mod:`clone.background`) the generator can leave the static background to it: with
+``alpha`` it also gives an alpha mask and its frame is ``alpha * rgb + (1 - alpha) * plate`` (every loss sees
+the composite), with ``plate_input`` it also sees the plate.
+
 Both networks are fully convolutional with 4x4 stride-2 convolutions (pix2pix): full-resolution work is
 only the first and the last layer, which keeps a 128² generator at about 0.4 GMAC per frame on a CPU.
 """
@@ -20,6 +24,10 @@ from torch import Tensor, nn
 # Input channel groups. Built and split in one place (`generator_input`, `discriminator_input`).
 POSE_CHANNELS = 3
 FRAME_CHANNELS = 3
+PLATE_CHANNELS = 3
+ALPHA_CHANNELS = 1
+# Initial bias of the alpha output before tanh: alpha starts near (tanh(-1) + 1) / 2 = 0.12, mostly plate.
+ALPHA_BIAS = -1.0
 
 
 @dataclass(frozen=True)
@@ -34,6 +42,9 @@ class GeneratorConfig:
         max_channels: channel cap.
         upsample: ``transpose`` (pix2pix's 4x4 transposed convolutions) or ``nearest`` (nearest-neighbour
             upsampling then a 3x3 convolution: no checkerboard patterns, about 1.7x the generator's cost).
+        alpha: the last layer also gives an alpha mask, and the frame is the RGB composited over the background
+            plate passed to ``forward`` (see :func:`composite`).
+        plate_input: the plate passed to ``forward`` is 3 more input channels (after ``in_channels``).
     """
 
     in_channels: int = POSE_CHANNELS + FRAME_CHANNELS
@@ -42,6 +53,8 @@ class GeneratorConfig:
     depth: int = 5
     max_channels: int = 256
     upsample: str = "transpose"
+    alpha: bool = False
+    plate_input: bool = False
 
     def __post_init__(self) -> None:
         for name in ("in_channels", "out_channels", "base_channels", "depth", "max_channels"):
@@ -49,10 +62,18 @@ class GeneratorConfig:
                 raise ValueError(f"GeneratorConfig.{name} must be >= 1, got {getattr(self, name)}")
         if self.upsample not in UPSAMPLERS:
             raise ValueError(f"unknown upsample {self.upsample!r}; valid: {', '.join(sorted(UPSAMPLERS))}")
+        if self.alpha and self.out_channels != FRAME_CHANNELS:
+            raise ValueError(f"GeneratorConfig.alpha composites RGB over the plate: out_channels must be "
+                             f"{FRAME_CHANNELS}, got {self.out_channels}")
 
     def min_size(self) -> int:
         """Smallest square input this generator accepts (a 2x2 bottleneck)."""
         return 2 ** (self.depth + 1)
+
+    @property
+    def uses_plate(self) -> bool:
+        """Whether ``forward`` needs a background plate."""
+        return self.alpha or self.plate_input
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -126,8 +147,28 @@ def discriminator_input(pose_prev: Tensor, pose_cur: Tensor, frame_prev: Tensor,
     return torch.cat([pose_prev, pose_cur, frame_prev, frame_cur], dim=1)
 
 
+def composite(rgb_alpha: Tensor, plate: Tensor) -> Tensor:
+    """The frame of an RGB + alpha output over the background plate: ``alpha * rgb + (1 - alpha) * plate``.
+
+    Args:
+        rgb_alpha: [B, 4, H, W] in [-1, 1]: RGB, then alpha (-1 transparent, 1 opaque).
+        plate: [B or 1, 3, H, W] background plate in [-1, 1].
+
+    Returns:
+        [B, 3, H, W].
+    """
+    rgb, alpha = rgb_alpha[:, :FRAME_CHANNELS], (rgb_alpha[:, FRAME_CHANNELS:] + 1.0) * 0.5  # [B, 3|1, H, W]
+    return alpha * rgb + (1.0 - alpha) * plate
+
+
 def _channels(base: int, level: int, cap: int) -> int:
     return min(base * 2**level, cap)
+
+
+def _last_conv(module: nn.Module) -> nn.Conv2d | nn.ConvTranspose2d:
+    """The last convolution in ``module`` (the head's output layer, whatever the upsampler)."""
+    convs = [m for m in module.modules() if isinstance(m, (nn.Conv2d, nn.ConvTranspose2d))]
+    return convs[-1]
 
 
 class _Down(nn.Sequential):
@@ -165,13 +206,16 @@ class UNetGenerator(nn.Module):
 
     Level ``i`` (1-based) works at ``H / 2**i`` with ``min(base * 2**(i-1), max)`` channels. The outermost
     layers have no normalisation (pix2pix), the bottleneck none either (a 2x2 instance norm is noise).
+    With ``config.alpha`` the head gives one more channel, alpha, whose bias starts at ``ALPHA_BIAS``: the
+    first frames are mostly the plate, and G learns where the person covers it.
     """
 
     def __init__(self, config: GeneratorConfig = GeneratorConfig()) -> None:
         super().__init__()
         self.config = config
         c = [_channels(config.base_channels, i, config.max_channels) for i in range(config.depth)]
-        downs = [_Down(config.in_channels, c[0], norm=False)]
+        c_in = config.in_channels + (PLATE_CHANNELS if config.plate_input else 0)
+        downs = [_Down(c_in, c[0], norm=False)]
         downs += [_Down(c[i - 1], c[i], norm=i < config.depth - 1) for i in range(1, config.depth)]
         self.downs = nn.ModuleList(downs)
         # Up level i maps level i+1's output (concatenated with level i+1's skip, except innermost) to c[i].
@@ -181,10 +225,26 @@ class UNetGenerator(nn.Module):
             ups.append(_Up(c_in, c[i], config.upsample))
         self.ups = nn.ModuleList(ups)
         c_head = 2 * c[0] if config.depth > 1 else c[0]
-        self.head = nn.Sequential(UPSAMPLERS[config.upsample](c_head, config.out_channels, True), nn.Tanh())
+        c_out = config.out_channels + (ALPHA_CHANNELS if config.alpha else 0)
+        self.head = nn.Sequential(UPSAMPLERS[config.upsample](c_head, c_out, True), nn.Tanh())
+        if config.alpha:
+            with torch.no_grad():
+                _last_conv(self.head).bias[config.out_channels:] = ALPHA_BIAS
 
-    def forward(self, x: Tensor) -> Tensor:
-        """Args: x: [B, in_channels, H, W] (H, W multiples of 2**depth). Returns: [B, out_channels, H, W]."""
+    def forward(self, x: Tensor, plate: Tensor | None = None) -> Tensor:
+        """The frame.
+
+        Args:
+            x: [B, in_channels, H, W] (H, W multiples of 2**depth), see :func:`generator_input`.
+            plate: [B or 1, 3, H, W] background plate in [-1, 1]; required when ``config.uses_plate``.
+
+        Returns:
+            [B, out_channels, H, W].
+        """
+        if self.config.uses_plate and plate is None:
+            raise ValueError("this generator composites over (or sees) a background plate; pass plate=")
+        if self.config.plate_input:
+            x = torch.cat([x, plate.expand(x.shape[0], -1, -1, -1)], dim=1)  # [B, in_channels + 3, H, W]
         skips = []
         for down in self.downs:
             x = down(x)
@@ -193,7 +253,8 @@ class UNetGenerator(nn.Module):
         for up in self.ups:
             x = up(x)
             x = torch.cat([x, skips.pop()], dim=1)  # [B, 2*c[i], H/2**(i+1), W/2**(i+1)]
-        return self.head(x)
+        out = self.head(x)  # [B, out_channels (+ 1 alpha), H, W]
+        return composite(out, plate) if self.config.alpha else out
 
 
 class PatchDiscriminator(nn.Module):

@@ -11,14 +11,16 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
 - ``track_summary``: frame counts, visible fractions, median bone lengths (for reports)
 - ``reference_codes``: ``ReferenceCodes.to_dict()`` of the retargeting network, or None; ``codes_weights``:
   the SHA-256 of the weights file that made them, ``codes_weights_path`` where that file was
+- ``background``: ``{"plate": [S, S, 3] uint8}``, the reference's background plate on the canvas
+  (:mod:`clone.background`), or None; a generator with ``alpha`` or ``plate_input`` composites over it
 - ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
   the weights: ``steps``, ``seconds``, ``device``, ``config`` (the ``TrainConfig`` as a dict), ``trainer``
   (discriminator, both optimisers, step) and ``rng`` (the run's random state). A file without it drives as
   well but cannot be resumed.
 
-Format versions: 2 keeps the training state in the file under ``training``; 1 kept only the record there
+Format versions: 3 adds ``background``; 2 keeps the training state in the file under ``training``; 1 kept only the record there
 (steps, seconds, config, device), with the state in a sibling ``<model>.state`` file. Version 1 files still
-load (and drive); they cannot be resumed.
+load (and drive); they cannot be resumed. Version 1 and 2 files have no plate and drive as they did.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ import torch
 
 from clone.canvas import Canvas
 from clone.networks import GeneratorConfig, UNetGenerator, build_generator
+from clone.tensors import to_tensor
 from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
@@ -45,7 +48,7 @@ from retarget.global_scale import ScaleStats
 log = logging.getLogger(__name__)
 
 KIND = "clone2d-reference"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 LAYOUT = "body15"
 
 
@@ -66,6 +69,7 @@ class ReferenceModel:
         codes_weights_path: where those weights were (a hint for `clone drive` when no --weights is given).
         training: the training run's record and resume state (see the module docstring), or None.
         temporal: whether the generator takes the previous frame.
+        plate: [S, S, 3] uint8 RGB background plate on the canvas, or None (a model trained without one).
     """
 
     generator_name: str
@@ -80,12 +84,17 @@ class ReferenceModel:
     codes_weights_path: str | None = None
     training: dict[str, Any] | None = None
     temporal: bool = True
+    plate: np.ndarray | None = None
 
     def build_generator(self, device: torch.device | str = "cpu") -> UNetGenerator:
         """The generator with its weights, in eval mode on ``device``."""
         net = build_generator(self.generator_name, self.generator_config)
         net.load_state_dict(self.generator_state)
         return net.to(device).eval()
+
+    def plate_tensor(self, device: torch.device | str = "cpu") -> torch.Tensor | None:
+        """The background plate as the generator takes it, [1, 3, S, S] in [-1, 1] on ``device``; None without one."""
+        return None if self.plate is None else to_tensor(self.plate[None]).to(device)
 
 
 def preview_path(model_path: str | os.PathLike) -> Path:
@@ -172,6 +181,7 @@ def save_reference_model(model: ReferenceModel, path: str | os.PathLike, overwri
         "reference_codes": None if model.reference_codes is None else _to_storable(model.reference_codes),
         "codes_weights": model.codes_weights,
         "codes_weights_path": model.codes_weights_path,
+        "background": None if model.plate is None else {"plate": torch.from_numpy(model.plate.copy())},
     }
     if model.training is not None:
         # As it is: optimiser states have int keys and tensors that _to_storable would change.
@@ -215,6 +225,21 @@ def _training(training: Any) -> dict[str, Any] | None:
     return training
 
 
+def _plate(background: Any, config: GeneratorConfig, canvas: Canvas) -> np.ndarray | None:
+    """The stored plate, checked against the generator that needs it and the canvas it belongs to."""
+    if background is None:
+        if config.uses_plate:
+            raise ValueError("the generator composites over a background plate, but the file holds none")
+        return None
+    if not isinstance(background, dict) or not isinstance(background.get("plate"), torch.Tensor):
+        raise TypeError("background entry is not a dict holding a plate tensor")
+    plate = background["plate"].numpy()
+    if plate.dtype != np.uint8 or plate.shape != (canvas.size, canvas.size, 3):
+        raise ValueError(f"background plate is {plate.dtype} {tuple(plate.shape)}, not uint8 "
+                         f"({canvas.size}, {canvas.size}, 3)")
+    return plate
+
+
 def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
     """Read a reference model written by :func:`save_reference_model`.
 
@@ -225,11 +250,12 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
     try:
         gen = data["generator"]
         config = GeneratorConfig.from_dict(gen["config"])
+        canvas = Canvas.from_dict(data["canvas"])
         model = ReferenceModel(
             generator_name=str(gen["name"]),
             generator_config=config,
             generator_state=dict(gen["state_dict"]),
-            canvas=Canvas.from_dict(data["canvas"]),
+            canvas=canvas,
             scale_stats=None if data.get("scale_stats") is None else ScaleStats.from_dict(data["scale_stats"]),
             reference_track=_track_from_dict(data["reference_track"]),
             track_summary=_from_storable(data.get("track_summary", {})),
@@ -238,6 +264,7 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
             codes_weights_path=data.get("codes_weights_path"),
             training=_training(data.get("training")),
             temporal=bool(data.get("temporal", True)),
+            plate=_plate(data.get("background"), config, canvas),
         )
         model.build_generator("cpu")  # fails here, not mid-drive, when the weights do not fit the config
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:

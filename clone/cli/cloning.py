@@ -59,6 +59,10 @@ def train_ref(
     amp: Annotated[bool | None, typer.Option(
         "--amp/--no-amp", help="bfloat16 mixed precision on CUDA (default: on where the GPU supports it); "
         "ignored on the CPU.")] = None,
+    background: Annotated[bool | None, typer.Option(
+        "--background/--no-background", help="Estimate the static background from the frames and let the "
+        "generator composite the person over it (default; for a static camera). When resuming, the stored "
+        "choice.")] = None,
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
@@ -96,14 +100,18 @@ def train_ref(
         # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
         # stored one (e.g. to resume on more processes than the stored batch has samples).
         config = None
-        if size is not None or batch_size is not None:
+        if size is not None or batch_size is not None or background is not None:
             from clone.train_ref import load_resumable
 
             stored = load_resumable(out).training["config"]
+            if background is not None and background != bool(stored.get("background", False)):
+                raise InputError(f"--{'' if background else 'no-'}background: the model was trained "
+                                 f"{'without' if background else 'with'} a background plate; cannot resume so")
             config = TrainConfig(size=size if size is not None else int(stored["size"]),
                                  batch_size=batch_size if batch_size is not None else int(stored["batch_size"]))
     else:
-        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1)
+        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1,
+                             background=background is not False)
 
     with distributed.launched(dev) as dev, Progress(
         TextColumn("[bold]train-ref"), BarColumn(), TextColumn("{task.fields[info]}"), TimeElapsedColumn(),

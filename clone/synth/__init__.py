@@ -10,7 +10,8 @@ truth of a cloning run; ``clone synth``, the demo and the benchmarks use it.
   primitives.
 - :mod:`~clone.synth.background`: ``make_background`` (wall and floor).
 - :mod:`~clone.synth.body`: ``PerformerRenderer``, a performer from projected joints and a look.
-- :mod:`~clone.synth.performance`: ``render_performance``, ``save_performance`` (frames, poses, meta).
+- :mod:`~clone.synth.performance`: ``render_performance``, ``save_performance`` (frames, poses, meta),
+  ``performance_background`` (the empty background as the video shows it).
 """
 
 from clone.synth.appearance import (
@@ -25,7 +26,7 @@ from clone.synth.appearance import (
 from clone.synth.background import make_background
 from clone.synth.body import PerformerRenderer
 from clone.synth.paint import Paint
-from clone.synth.performance import render_performance, save_performance
+from clone.synth.performance import performance_background, render_performance, save_performance
 from clone.synth.raster import Rasterizer
 
 __all__ = [
@@ -40,6 +41,7 @@ __all__ = [
     "get_look",
     "look_from_seed",
     "make_background",
+    "performance_background",
     "render_performance",
     "save_performance",
 ]

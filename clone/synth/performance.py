@@ -159,6 +159,23 @@ def render_performance(
     return render_frames(xy, depth, camera.scale, look, (w, h), WORLD_JOINTS, floor_y), track, meta
 
 
+def performance_background(look: Look, yaw: float, pitch: float = 0.0, size: int | tuple[int, int] = 256
+                           ) -> np.ndarray:
+    """The empty background of a performance as it appears in its video: what every frame shows where the
+    performer is not (the ground truth of a background plate).
+
+    Args:
+        look: appearance of the performer (its backdrop).
+        yaw, pitch, size: as for :func:`render_performance` (the framing rule places the floor line).
+
+    Returns:
+        [H, W, 3] uint8 RGB.
+    """
+    w, h = _canvas_size(size)
+    camera = frame_camera(yaw, pitch, (w, h))
+    return make_background(w, h, look.backdrop, floor_line(camera.ty, camera.scale, h, pitch))
+
+
 def _merge_meta(meta: dict, extra: Mapping[str, Mapping] | None) -> None:
     """Update ``meta`` with ``extra`` in place: a dict value is merged into the section of that name."""
     for key, value in (extra or {}).items():

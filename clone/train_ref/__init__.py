@@ -13,6 +13,9 @@ canvas. Each step takes a frame ``t`` with a usable pose and its predecessor ``t
   the pair with G's frames, so it judges the step from one frame to the next as well as the frame.
 
 Losses: L1 to the real frame, least-squares GAN, and pix2pixHD's feature matching on D's activations.
+Background (``TrainConfig.background``, on by default): a plate estimated from the frames where the person is
+elsewhere (:mod:`clone.background`); G gives RGB + alpha, its frame is composited over the plate (warped with
+the sample) and every loss sees the composite; the plate is stored in the model for `clone drive`.
 Augmentation: one small random affine warp (kornia) applied identically to both pose maps and both frames.
 
 The result is ONE reference-model file (see :mod:`clone.reference_model`) holding the generator and, under
@@ -33,6 +36,7 @@ from clone.train_ref.data import (
     frame_store,
     read_reference,
     reference_codes,
+    reference_plate,
     track_summary,
     usable_frames,
 )
@@ -60,6 +64,7 @@ __all__ = [
     "random_affines",
     "read_reference",
     "reference_codes",
+    "reference_plate",
     "resume_config",
     "track_summary",
     "train_reference",

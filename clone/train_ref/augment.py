@@ -30,9 +30,10 @@ def random_affines(batch: int, size: int, cfg: AugmentConfig, generator: torch.G
 
 
 def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]:
-    """Warp pose maps and frames of a sample with the same [B, 2, 3] matrices (kornia).
+    """Warp pose maps, frames and the background plate (when the sample has one) with the same [B, 2, 3]
+    matrices (kornia): the plate stays the background of the warped frames.
 
-    Pose maps are padded with black (-1), frames by repeating their border.
+    Pose maps are padded with black (-1), frames and plate by repeating their border.
     """
     from kornia.geometry.transform import warp_affine
 
@@ -42,9 +43,11 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     poses = torch.cat([sample["pose_prev"], sample["pose_cur"]], dim=1) + 1.0  # [B, 6, S, S], black = 0
     poses = warp_affine(poses, m, (size, size), padding_mode="zeros", align_corners=True) - 1.0
     out["pose_prev"], out["pose_cur"] = poses[:, :3], poses[:, 3:]
-    frames = torch.cat([sample["frame_prev"], sample["frame_cur"]], dim=1)  # [B, 6, S, S]
+    names = ["frame_prev", "frame_cur"] + (["plate"] if "plate" in sample else [])
+    frames = torch.cat([sample[n] for n in names], dim=1)  # [B, 6 or 9, S, S]
     frames = warp_affine(frames, m, (size, size), padding_mode="border", align_corners=True)
-    out["frame_prev"], out["frame_cur"] = frames[:, :3], frames[:, 3:]
+    for i, name in enumerate(names):
+        out[name] = frames[:, 3 * i:3 * i + 3]
     out["frame_prev"] = torch.where(sample["has_prev"].to(m.device)[:, None, None, None], out["frame_prev"], 0.0)
     return out
 

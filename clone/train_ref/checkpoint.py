@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 
 from clone.canvas import Canvas
@@ -45,6 +46,8 @@ class ReferenceInfo:
         codes: the retargeting network's codes of the reference, or None.
         codes_weights: SHA-256 of the weights that made ``codes``, or None.
         codes_weights_path: where those weights were, or None.
+        plate: [S, S, 3] uint8 background plate on the canvas, or None (a run without one, or before the
+            frames are read).
     """
 
     canvas: Canvas
@@ -54,6 +57,7 @@ class ReferenceInfo:
     codes: dict[str, Any] | None
     codes_weights: str | None
     codes_weights_path: str | None
+    plate: np.ndarray | None = None
 
 
 def checkpoint_model(
@@ -89,6 +93,7 @@ def checkpoint_model(
         codes_weights_path=reference.codes_weights_path,
         training=training,
         temporal=config.temporal,
+        plate=reference.plate,
     )
 
 

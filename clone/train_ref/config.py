@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from clone.background import PlateConfig
 from clone.choices import PrevSource
 from clone.networks import DiscriminatorConfig, GeneratorConfig, default_depth
 
@@ -57,6 +58,10 @@ class TrainConfig:
         prev_source: ``real`` previous frames or G's own (``generated``), see
             :meth:`clone.train_ref.Trainer.previous_input`; the plain name is accepted too.
         temporal: give G the previous frame at all.
+        background: estimate the reference's background plate (:mod:`clone.background`) and let G composite
+            its frames over it (RGB + alpha); the plate is stored in the model.
+        plate_input: G also sees the plate as input channels (with ``background``).
+        plate: how the plate is estimated.
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
         steps: default number of steps when neither steps nor minutes are given.
         preview_every: steps between preview images.
@@ -83,6 +88,9 @@ class TrainConfig:
     # Teacher forcing with real previous frames drifted by 3 dB PSNR when driving on its own output.
     prev_source: PrevSource = PrevSource.GENERATED
     temporal: bool = True
+    background: bool = True
+    plate_input: bool = False
+    plate: PlateConfig = field(default_factory=PlateConfig)
     min_visible_joints: int = 10
     steps: int = 2000
     preview_every: int = 250
@@ -105,7 +113,7 @@ class TrainConfig:
         depth = self.depth if self.depth is not None else default_depth(self.size)
         return GeneratorConfig(
             in_channels=6 if self.temporal else 3, base_channels=self.base_channels, depth=depth,
-            upsample=self.upsample,
+            upsample=self.upsample, alpha=self.background, plate_input=self.background and self.plate_input,
         )
 
     def discriminator_config(self) -> DiscriminatorConfig:
@@ -129,4 +137,7 @@ class TrainConfig:
         data = dict(data)
         augment = AugmentConfig(**data.pop("augment"))
         loss = LossConfig(**data.pop("loss"))
-        return cls(**data, augment=augment, loss=loss)
+        plate = PlateConfig(**data.pop("plate", {}))
+        # Runs stored before the background plate trained without one.
+        data.setdefault("background", False)
+        return cls(**data, augment=augment, loss=loss, plate=plate)

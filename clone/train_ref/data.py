@@ -18,6 +18,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from clone.background import PlateConfig, estimate_plate
 from clone.canvas import render_pose_map
 from clone.choices import Align
 from clone.reference_model import LAYOUT, file_sha256
@@ -51,13 +52,16 @@ class ReferenceData:
         joints: [N, J, 2] float32 canvas pixels, NaN where missing.
         usable: [N] bool, frames trained on.
         size: S.
+        plate: [S, S, 3] uint8 RGB background plate, or None (see :func:`reference_plate`).
     """
 
-    def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int) -> None:
+    def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int,
+                 plate: np.ndarray | None = None) -> None:
         self.frames = frames
         self.joints = joints
         self.usable = usable
         self.size = size
+        self.plate = plate
         self.layout = get_layout(LAYOUT)
         self.indices = np.flatnonzero(usable)
 
@@ -72,20 +76,40 @@ class ReferenceData:
 
         Returns:
             ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
-            frame of frame 0 is zeros); ``has_prev``: [B] bool.
+            frame of frame 0 is zeros); ``has_prev``: [B] bool; with a plate, ``plate``: [B, 3, S, S] (one
+            copy per sample: each is warped with its sample).
         """
         prev = idx - 1
         zero = np.zeros((self.size, self.size, 3), dtype=np.uint8)
         has_prev = torch.from_numpy(prev >= 0)
         frame_prev = to_tensor(np.stack([self.frames[p] if p >= 0 else zero for p in prev]))
         frame_prev[~has_prev] = 0.0
-        return {
+        sample = {
             "pose_prev": to_tensor(np.stack([self.pose_map(int(p)) for p in prev])),
             "pose_cur": to_tensor(np.stack([self.pose_map(int(i)) for i in idx])),
             "frame_prev": frame_prev,
             "frame_cur": to_tensor(np.stack([self.frames[i] for i in idx])),
             "has_prev": has_prev,
         }
+        if self.plate is not None:
+            sample["plate"] = to_tensor(self.plate[None]).repeat(len(idx), 1, 1, 1)  # [B, 3, S, S]
+        return sample
+
+
+def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:
+    """The background plate of the reference on the canvas (:func:`clone.background.estimate_plate`).
+
+    Args:
+        data: the reference's frames and poses on the canvas.
+        config: how the plate is estimated.
+
+    Returns:
+        [S, S, 3] uint8 RGB.
+    """
+    plate = estimate_plate(data.frames, data.joints, data.layout, data.usable, config)
+    log.info("background plate from %d frames; %.1f%% of the canvas never free of the person (median of all "
+             "frames there)", plate.frames, 100.0 * plate.fallback_share)
+    return plate.image
 
 
 @contextlib.contextmanager

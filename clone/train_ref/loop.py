@@ -19,7 +19,7 @@ import logging
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -37,6 +37,7 @@ from clone.train_ref.data import (
     maybe_scale_stats,
     read_reference,
     reference_codes,
+    reference_plate,
     track_summary,
     usable_frames,
 )
@@ -184,6 +185,7 @@ def train_reference(
         # Training needs autograd whatever mode the caller left torch in.
         with torch.enable_grad(), frame_store(count, reference.canvas.size) as store:
             data = _read_frames(run, frames, count, usable, store)
+            _add_plate(run, data, previous)
             rows = preview_rows(data.indices)
             run.started = time.perf_counter()  # --minutes counts training only
             limit_s = minutes * 60.0 if minutes is not None else None
@@ -283,6 +285,18 @@ def _read_frames(run: _Run, frames: Frames, count: int, usable: np.ndarray, stor
         run.report(TrainProgress("reading", i + 1, count, run.elapsed(), None, {}))
     log.info("read %d frames in %.1f s", count, run.elapsed())
     return ReferenceData(store, image_to_canvas(run.reference.track.joints, canvas), usable, canvas.size)
+
+
+def _add_plate(run: _Run, data: ReferenceData, previous: ReferenceModel | None) -> None:
+    """Give the run and its data the background plate when the run trains with one: a resumed model keeps
+    the plate its generator learnt to composite over, a new one estimates it from the frames just read."""
+    if not run.config.background:
+        return
+    plate = previous.plate if previous is not None else None
+    if plate is None:
+        plate = reference_plate(data, run.config.plate)
+    data.plate = plate
+    run.reference = replace(run.reference, plate=plate)
 
 
 def _train_steps(

@@ -22,7 +22,8 @@ def preview_grid(trainer: Trainer, data: ReferenceData, rows: np.ndarray) -> np.
     sample = data.batch(rows)
     with torch.no_grad():
         trainer.g.eval()
-        fake = trainer.generate(sample["pose_cur"].to(trainer.device), sample["frame_prev"].to(trainer.device))
+        plate = sample["plate"].to(trainer.device) if "plate" in sample else None
+        fake = trainer.generate(sample["pose_cur"].to(trainer.device), sample["frame_prev"].to(trainer.device), plate)
         trainer.g.train()
     cols = [to_images(sample["pose_cur"]), to_images(fake), to_images(sample["frame_cur"])]
     return np.concatenate([np.concatenate(c, axis=0) for c in cols], axis=1)

@@ -3,6 +3,8 @@
 G trains on ``(pose map t, previous frame)`` -> frame t with L1 to the real frame, least-squares GAN and
 pix2pixHD's feature matching on D's activations; D judges the consecutive pair
 ``(pose t-1, pose t, frame t-1, frame t)``, real frames against G's. Images are ``[B, 3, S, S]`` in [-1, 1].
+A generator trained with a background plate gets the sample's (warped) ``plate`` and composites over it, so
+every loss sees the composite.
 
 Under ``torchrun`` (:mod:`retarget.distributed`) both networks train in DistributedDataParallel: each process
 steps on its part of the global batch, and the random numbers of the whole batch are drawn on every process
@@ -61,10 +63,10 @@ class Trainer:
         self.opt_d = torch.optim.Adam(self.d.parameters(), lr=config.lr, betas=betas)
         self.step_count = 0
 
-    def generate(self, pose: Tensor, prev: Tensor) -> Tensor:
-        """G's frame (float32) for [B, 3, S, S] pose maps and previous frames."""
+    def generate(self, pose: Tensor, prev: Tensor, plate: Tensor | None = None) -> Tensor:
+        """G's frame (float32) for [B, 3, S, S] pose maps, previous frames and background plates (or None)."""
         with distributed.autocast(self.device, self.dtype):
-            return self.g(generator_input(pose, prev) if self.config.temporal else pose).float()
+            return self.g(generator_input(pose, prev) if self.config.temporal else pose, plate).float()
 
     def previous_input(
         self, sample: dict[str, Tensor], generator: torch.Generator, part: slice | None = None,
@@ -88,7 +90,7 @@ class Trainer:
         cfg = self.config
         if cfg.prev_source == "generated":
             with torch.no_grad():
-                prev = self.generate(sample["pose_prev"], torch.zeros_like(sample["frame_prev"]))
+                prev = self.generate(sample["pose_prev"], torch.zeros_like(sample["frame_prev"]), sample.get("plate"))
         else:
             prev = sample["frame_prev"]
         has_prev = sample["has_prev"]
@@ -124,7 +126,7 @@ class Trainer:
 
         with distributed.autocast(self.device, self.dtype):
             g_in = generator_input(sample["pose_cur"], prev_input) if self.config.temporal else sample["pose_cur"]
-            fake = self._g_step(g_in).float()  # [B, 3, S, S]
+            fake = self._g_step(g_in, sample.get("plate")).float()  # [B, 3, S, S]
             # The plain D: its parameters get no gradient here, which DistributedDataParallel would wait for.
             self.d.requires_grad_(False)
             fake_feats = self.d(discriminator_input(*fake_pair, fake))

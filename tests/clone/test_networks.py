@@ -11,6 +11,7 @@ from clone.networks import (
     UNetGenerator,
     build_discriminator,
     build_generator,
+    composite,
     default_depth,
     discriminator_input,
     feature_matching_loss,
@@ -116,3 +117,52 @@ def test_one_adam_step_lowers_l1_on_a_tiny_batch():
     with torch.no_grad():
         after = F.l1_loss(g(x), target)
     assert after < before
+
+
+def test_composite_puts_opaque_rgb_over_the_plate():
+    rgb, plate = torch.rand(2, 3, 8, 8) * 2 - 1, torch.rand(1, 3, 8, 8) * 2 - 1
+    alpha = torch.full((2, 1, 8, 8), -1.0)
+    alpha[1, :, :4] = 1.0  # the top half of the second sample is opaque
+    out = composite(torch.cat([rgb, alpha], dim=1), plate)
+    assert out.shape == (2, 3, 8, 8)
+    torch.testing.assert_close(out[0], plate[0])
+    torch.testing.assert_close(out[1, :, :4], rgb[1, :, :4])
+    torch.testing.assert_close(out[1, :, 4:], plate[0, :, 4:])
+    torch.testing.assert_close(composite(torch.cat([rgb, alpha * 0], dim=1), plate), 0.5 * (rgb + plate))
+
+
+@pytest.mark.parametrize("upsample", ["transpose", "nearest"])
+def test_alpha_generator_composites_over_the_plate(upsample):
+    torch.manual_seed(0)
+    cfg = GeneratorConfig(base_channels=4, depth=3, max_channels=16, upsample=upsample, alpha=True)
+    g = UNetGenerator(cfg).eval()
+    x, plate = torch.randn(2, 6, 32, 32), torch.rand(1, 3, 32, 32) * 2 - 1
+    with torch.no_grad():
+        y = g(x, plate)
+        assert y.shape == (2, 3, 32, 32) and y.abs().max() <= 1.0
+        # It starts mostly transparent (ALPHA_BIAS): much nearer the plate than a plain generator's frame.
+        plain = UNetGenerator(GeneratorConfig(base_channels=4, depth=3, max_channels=16, upsample=upsample)).eval()
+        assert (y - plate).abs().mean() < 0.5 * (plain(x) - plate).abs().mean()
+        # A transparent head gives the plate exactly, whatever the input.
+        head = [m for m in g.head.modules() if isinstance(m, (torch.nn.Conv2d, torch.nn.ConvTranspose2d))][-1]
+        head.weight[3:] = 0.0
+        head.bias[3:] = -50.0
+        torch.testing.assert_close(g(x, plate), plate.expand(2, -1, -1, -1))
+    with pytest.raises(ValueError, match="plate"):
+        g(x)
+
+
+def test_plate_input_generator_sees_the_plate():
+    torch.manual_seed(0)
+    g = UNetGenerator(GeneratorConfig(base_channels=4, depth=3, max_channels=16, plate_input=True)).eval()
+    assert g.downs[0][0].in_channels == 9
+    x = torch.randn(2, 6, 32, 32)
+    with torch.no_grad():
+        a, b = g(x, torch.zeros(1, 3, 32, 32)), g(x, torch.ones(1, 3, 32, 32))
+    assert a.shape == (2, 3, 32, 32) and not torch.allclose(a, b)
+    assert GeneratorConfig(plate_input=True).uses_plate and not GeneratorConfig().uses_plate
+    with pytest.raises(ValueError, match="out_channels must be 3"):
+        GeneratorConfig(alpha=True, out_channels=4)
+    # Older configs (no plate fields) read as generators without a plate.
+    old = {k: v for k, v in GeneratorConfig().to_dict().items() if k not in ("alpha", "plate_input")}
+    assert GeneratorConfig.from_dict(old) == GeneratorConfig()

@@ -169,3 +169,50 @@ def test_file_sha256_and_preview_path(tmp_path):
     assert file_sha256(tmp_path / "w.pt") == hashlib.sha256(blob).hexdigest()
     assert preview_path(tmp_path / "models" / "ref.pt") == tmp_path / "models" / "ref.preview.png"
     assert preview_path("runs/a.b.pt") == Path("runs/a.b.preview.png")
+
+
+PLATE_CONFIG = GeneratorConfig(base_channels=4, depth=2, max_channels=8, alpha=True)
+
+
+def _plate_model(**changes: object) -> ReferenceModel:
+    torch.manual_seed(0)
+    plate = np.random.default_rng(1).integers(0, 256, (16, 16, 3), dtype=np.uint8)
+    fields = {"generator_config": PLATE_CONFIG, "generator_state": build_generator("unet", PLATE_CONFIG).state_dict(),
+              "plate": plate}
+    fields.update(changes)
+    return _model(**fields)
+
+
+def test_background_plate_round_trip(tmp_path):
+    model = _plate_model()
+    back = load_reference_model(save_reference_model(model, tmp_path / "ref.pt"))
+    assert back.generator_config == PLATE_CONFIG and back.plate.dtype == np.uint8
+    np.testing.assert_array_equal(back.plate, model.plate)
+    plate = back.plate_tensor()
+    assert plate.shape == (1, 3, 16, 16) and plate.min() >= -1 and plate.max() <= 1
+    x = torch.rand(1, CONFIG.in_channels, 16, 16)
+    with torch.no_grad():
+        torch.testing.assert_close(model.build_generator()(x, model.plate_tensor()), back.build_generator()(x, plate),
+                                   rtol=0, atol=0)
+    assert _model().plate is None and _model().plate_tensor() is None
+
+
+def test_format_2_files_load_and_run_without_a_plate(tmp_path):
+    path = save_reference_model(_model(), tmp_path / "ref.pt")
+    data = torch.load(path, weights_only=True)
+    data["format_version"] = 2
+    del data["background"]  # version 2 had no such entry
+    torch.save(data, path)
+    back = load_reference_model(path)
+    assert back.plate is None and not back.generator_config.uses_plate
+    _same_outputs(_model(), back)
+
+
+def test_a_missing_or_wrong_plate_is_a_damaged_model(tmp_path):
+    path = save_reference_model(_plate_model(), tmp_path / "ref.pt")
+    data = torch.load(path, weights_only=True)
+    for background, message in ((None, "holds none"), ({"plate": torch.zeros(8, 8, 3, dtype=torch.uint8)}, "8, 8, 3"),
+                                ({"plate": torch.zeros(16, 16, 3)}, "float32"), ([1], "not a dict")):
+        torch.save({**data, "background": background}, path)
+        with pytest.raises(InputError, match=f"damaged reference model \\(.*{message}"):
+            load_reference_model(path)

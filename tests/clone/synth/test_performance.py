@@ -87,3 +87,23 @@ def test_save_performance_round_trip(tmp_path: Path) -> None:
     assert saved["joints_outside_canvas"] == 0
     with pytest.raises(InputError, match="already exists"):  # never overwrites unasked
         save_performance(out, motion, skeleton, look, yaw=20.0, size=48, frames=3)
+
+
+def test_performance_background_is_what_the_video_shows_where_the_performer_is_not() -> None:
+    from clone.background import person_mask
+    from clone.synth import performance_background
+    from pose_io.measures import skeleton_height
+
+    motion = motion_of(waving(6))
+    skeleton, look, _ = get_character("average")
+    frames, track, _ = render_performance(motion, skeleton, look, yaw=20.0, pitch=4.0, size=(80, 64))
+    background = performance_background(look, yaw=20.0, pitch=4.0, size=(80, 64))
+    assert background.shape == (64, 80, 3) and background.dtype == np.uint8
+    body = track.to_layout("body15")
+    radius = 0.2 * skeleton_height(body.joints, body.joint_layout)
+    for frame, joints in zip(frames, body.joints):
+        away = ~person_mask(joints, (64, 80), body.joint_layout, radius)
+        assert away.mean() > 0.5 and np.array_equal(frame[away], background[away])
+        assert not np.array_equal(frame, background)  # the performer is in the picture
+    # Another view moves the floor line: another background.
+    assert not np.array_equal(performance_background(look, yaw=20.0, pitch=20.0, size=(80, 64)), background)

@@ -35,3 +35,14 @@ def test_previous_frame_is_zeros_without_one_and_when_dropped():
     assert torch.equal(out[1], torch.zeros(3, 8, 8))
     assert (out[0] - prev[0]).abs().mean() < 0.3 and not torch.equal(out[0], prev[0])
     assert degrade_previous(prev, has, AugmentConfig(), dropout=1.0, generator=gen).abs().max() == 0
+
+
+def test_the_plate_is_warped_with_the_frames():
+    gen = torch.Generator().manual_seed(0)
+    rng = np.random.default_rng(0)
+    frame = to_tensor(rng.integers(0, 256, (2, 32, 32, 3), dtype=np.uint8))
+    sample = {"pose_prev": frame, "pose_cur": frame, "frame_prev": frame, "frame_cur": frame, "plate": frame,
+              "has_prev": torch.tensor([True, True])}
+    out = warp_batch(sample, random_affines(2, 32, AugmentConfig(rotation_deg=10, translate=0.1), gen))
+    assert not torch.allclose(out["plate"], frame)
+    torch.testing.assert_close(out["plate"], out["frame_cur"])  # still the background of the warped frame

@@ -55,6 +55,7 @@ def test_resumed_run_equals_an_uninterrupted_one(reference, tmp_path):
     a, b = load_reference_model(straight), load_reference_model(split)
     assert a.training["steps"] == b.training["steps"] == 4
     assert_same_generator(a, b)
+    assert a.plate is not None and a.plate.tobytes() == b.plate.tobytes()  # the resumed run kept its plate
 
 
 def test_training_state_travels_with_the_model_file(reference, tmp_path):

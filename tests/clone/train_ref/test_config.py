@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from clone.background import PlateConfig
 from clone.train_ref import AugmentConfig, LossConfig, TrainConfig
 from clone.train_ref.config import PrevSource
 
@@ -27,3 +28,13 @@ def test_prev_source_is_checked_and_stored_as_its_name():
     data = config.to_dict()
     assert type(data["prev_source"]) is str and data["prev_source"] == "real"  # plain data in the model file
     assert TrainConfig.from_dict(data).prev_source is PrevSource.REAL
+
+
+def test_background_settings_round_trip_and_older_runs_had_none():
+    config = TrainConfig(plate_input=True, plate=PlateConfig(max_frames=20, margin=0.3))
+    assert TrainConfig.from_dict(config.to_dict()) == config
+    g = config.generator_config()
+    assert g.alpha and g.plate_input and g.in_channels == 6
+    assert not TrainConfig(background=False, plate_input=True).generator_config().uses_plate
+    old = {k: v for k, v in TrainConfig().to_dict().items() if k not in ("background", "plate_input", "plate")}
+    assert TrainConfig.from_dict(old) == TrainConfig(background=False)

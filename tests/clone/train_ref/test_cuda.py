@@ -36,7 +36,7 @@ def test_train_ref_on_cuda_writes_a_model_the_cpu_drives(reference, tmp_path, am
     assert all(v.dtype == torch.float32 for v in model.generator_state.values())
     assert preview_path(out).is_file()
     net = model.build_generator()  # on the CPU
-    assert torch.isfinite(net(torch.zeros(1, 6, 32, 32))).all()
+    assert torch.isfinite(net(torch.zeros(1, 6, 32, 32), model.plate_tensor())).all()
     resumed = CliRunner().invoke(app, _cuda_args(train_args(poses, frames, out, "--resume", amp, steps=5)))
     assert resumed.exit_code == 0, resumed.output
     assert load_reference_model(out).training["steps"] == 5

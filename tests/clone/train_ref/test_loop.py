@@ -29,9 +29,26 @@ def test_train_ref_writes_one_model_and_preview(reference, tmp_path):
     assert model.track_summary["usable_frames"] == 24
     preview = cv2.imread(str(preview_path(out)))
     assert preview.shape[1] == 3 * 32 and preview.shape[0] % 32 == 0
-    # The stored generator rebuilds and runs without any flags.
+    # The stored generator rebuilds and runs without any flags, over the stored background plate.
+    assert model.generator_config.alpha and model.plate is not None and model.plate.shape == (32, 32, 3)
     net = model.build_generator()
-    assert net(torch.zeros(1, 6, 32, 32)).shape == (1, 3, 32, 32)
+    assert net(torch.zeros(1, 6, 32, 32), model.plate_tensor()).shape == (1, 3, 32, 32)
+
+
+def test_no_background_trains_without_a_plate(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out, "--no-background", steps=1))
+    assert result.exit_code == 0, result.output
+    model = load_reference_model(out)
+    assert model.plate is None and not model.generator_config.uses_plate
+    assert model.build_generator()(torch.zeros(1, 6, 32, 32)).shape == (1, 3, 32, 32)
+    # Resuming keeps the stored choice; asking for the other one is refused before any work.
+    assert "background" in one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--resume",
+                                                                             "--background", steps=2)))
+    resumed = CliRunner().invoke(app, train_args(poses, frames, out, "--resume", steps=2))
+    assert resumed.exit_code == 0, resumed.output
+    assert load_reference_model(out).plate is None
 
 
 def test_default_out_is_ref_model_in_the_current_folder(reference, tmp_path, monkeypatch):
