@@ -1,8 +1,11 @@
-"""Measures of generated frames against the true ones: SSIM and PSNR of the whole frame and of the person.
+"""Measures of generated frames against the true ones: SSIM and PSNR of the whole frame, of the person and of
+the background.
 
 Frames are [H, W, 3] uint8 RGB. The person crop is the box of the ground-truth pose plus a margin, so a method
 that puts the person in the wrong place or with the wrong shape scores low there even on a perfect background.
-Identical frames have PSNR = inf.
+The background is every pixel outside that box: where the true frame shows only the scene, so its PSNR says how
+well the generator reproduces the reference's background, whatever the person does. Identical frames have
+PSNR = inf.
 """
 
 from __future__ import annotations
@@ -69,6 +72,29 @@ def frame_pair_scores(pred: np.ndarray, gt: np.ndarray) -> tuple[float, float]:
     return float(ssim), float(psnr)
 
 
+def _psnr(mse: np.ndarray) -> np.ndarray:
+    """PSNR in dB of 8-bit images from their mean squared error (inf where it is 0)."""
+    with np.errstate(divide="ignore"):
+        return 10.0 * np.log10(255.0**2 / mse)
+
+
+def background_error(pred: np.ndarray, gt: np.ndarray, box: tuple[int, int, int, int]) -> tuple[float, int]:
+    """Summed squared error and number of values of two frames outside ``box`` (the person's).
+
+    Args:
+        pred, gt: [H, W, 3] uint8 RGB frames of the same size.
+        box: (x0, y0, x1, y1) from :func:`person_box`.
+
+    Returns:
+        ``(sse, count)``; count is 0 when the box covers the whole frame.
+    """
+    x0, y0, x1, y1 = box
+    outside = np.ones(gt.shape[:2], dtype=bool)
+    outside[y0:y1, x0:x1] = False
+    diff = pred[outside].astype(np.float64) - gt[outside].astype(np.float64)  # [N, 3]
+    return float((diff**2).sum()), int(diff.size)
+
+
 class FrameScorer:
     """Collects SSIM/PSNR of generated frames against the truth, one frame at a time.
 
@@ -83,6 +109,7 @@ class FrameScorer:
         self.gt_joints = gt_joints
         self.margin = margin
         self._rows: list[tuple[float, float, float, float]] = []
+        self._background: list[tuple[float, int]] = []  # (summed squared error, pixel values) outside the box
 
     def add(self, pred: np.ndarray, gt: np.ndarray) -> None:
         """Score the next frame pair ([H, W, 3] uint8 RGB each)."""
@@ -98,14 +125,23 @@ class FrameScorer:
             if box is not None:
                 x0, y0, x1, y1 = box
                 crop = frame_pair_scores(pred[y0:y1, x0:x1], gt[y0:y1, x0:x1])
+                self._background.append(background_error(pred, gt, box))
         self._rows.append((ssim, psnr, *crop))
 
     def scores(self) -> Scores:
-        """``ssim``, ``psnr`` (and ``ssim_crop``, ``psnr_crop`` with ground-truth poses): per frame and mean."""
+        """``ssim``, ``psnr`` (and ``ssim_crop``, ``psnr_crop``, ``psnr_background`` with ground-truth poses):
+        per frame and mean; the background's summary is the PSNR of the squared error pooled over all frames
+        (a mean of per-frame values would be inf as soon as one frame's background is exact)."""
         names = ("ssim", "psnr", "ssim_crop", "psnr_crop")[: 4 if self.gt_joints is not None else 2]
         table = np.array(self._rows, dtype=np.float64).reshape(-1, 4)
         per_frame = {n: table[:, i] for i, n in enumerate(names)}
-        return Scores(per_frame, {n: nan_mean(v) for n, v in per_frame.items()})
+        summary = {n: nan_mean(v) for n, v in per_frame.items()}
+        if self._background:
+            sse, count = np.array(self._background, dtype=np.float64).T  # [F] each
+            with np.errstate(divide="ignore"):
+                per_frame["psnr_background"] = _psnr(sse / np.maximum(count, 1))
+                summary["psnr_background"] = float(_psnr(np.array(sse.sum() / max(count.sum(), 1))))
+        return Scores(per_frame, summary)
 
 
 def frame_scores(

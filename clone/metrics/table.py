@@ -47,6 +47,11 @@ METRICS: dict[str, MetricInfo] = {
         "SSIM (person)", "", "higher", "SSIM of a crop around the true pose's box plus 15 % margin"
     ),
     "psnr_crop": MetricInfo("PSNR (person)", "dB", "higher", "PSNR of the same crop around the person"),
+    "psnr_background": MetricInfo(
+        "PSNR (background)", "dB", "higher",
+        "PSNR of every pixel outside that crop, where the true frame shows only the scene (squared error pooled "
+        "over all frames)",
+    ),
     "ssim": MetricInfo("SSIM (frame)", "", "higher", "structural similarity of the whole frame to the true frame"),
     "psnr": MetricInfo(
         "PSNR (frame)", "dB", "higher", "peak signal-to-noise ratio of the whole frame (inf when identical)"

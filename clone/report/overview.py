@@ -26,7 +26,7 @@ from pose_io.errors import InputError
 # The measures of the summary across pairs, in this order (the primary pose measure first); every other
 # measure is on each pair's own page.
 OVERVIEW_KEYS: tuple[str, ...] = (
-    "pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "psnr_crop", "ssim", "psnr",
+    "pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "psnr_crop", "ssim", "psnr", "psnr_background",
     "limb_error_pct", "jitter_pct", "foot_slide_pct", "stage_share",
 )  # fmt: skip
 # The claim's ratio: how many times the first method's primary error is the second's.

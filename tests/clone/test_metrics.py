@@ -195,6 +195,24 @@ def test_frame_scores_identical_and_noisy():
         metrics.frame_scores(noisy[:2], gt)
 
 
+def test_background_psnr_counts_only_pixels_outside_the_person():
+    rng = np.random.default_rng(1)
+    gt = rng.integers(20, 230, (2, 64, 48, 3), dtype=np.uint8)
+    joints = np.repeat(np.array([[[10.0, 10.0], [30.0, 50.0]]]), 2, axis=0)
+    box = metrics.person_box(joints[0], (48, 64))  # (7, 4, 33, 56) with the default margin
+    x0, y0, x1, y1 = box
+    inside = gt.copy()
+    inside[:, y0:y1, x0:x1] = 0  # a wrong person, an exact background
+    assert math.isinf(metrics.frame_scores(inside, gt, joints).summary["psnr_background"])
+    shifted = gt.copy()
+    shifted[0, :2] += 10  # rows 0-1 lie above the box: 2 rows x 48 px x 3 values off by 10, in frame 0 only
+    outside = 64 * 48 * 3 - (y1 - y0) * (x1 - x0) * 3
+    scores = metrics.frame_scores(shifted, gt, joints)
+    pooled = 2 * 48 * 3 * 100 / (2 * outside)
+    assert scores.summary["psnr_background"] == pytest.approx(10 * np.log10(255**2 / pooled))
+    assert math.isinf(scores.per_frame["psnr_background"][1])
+
+
 def test_evaluate_track_uses_fps_window_and_gt_layout():
     joints = stand(30)
     track = PoseTrack(joints, np.ones(joints.shape[:2]), 30.0, (200, 240), "body15")
