@@ -1,11 +1,15 @@
 """Stage `drive`: ``clone.drive.drive`` end to end (pose file -> H.264 mp4), frames/s and peak RSS.
 
-A tiny reference model is trained for a few steps in a temporary folder on a short synthetic performance
-(motion world, 24 frames) at a 64² canvas: speed does not depend on how well it is trained, but it does
-on the canvas (the generator's cost grows with its area). Each (track length, method) runs in its own
-subprocess (``python -m bench.drive``) so its peak RSS is its own; 1,000 vs 10,000 frames shows whether
-memory stays flat. Baseline, measured in the same subprocess: the generator alone, batch 1 under
-inference mode at the same canvas, frame after frame (the floor drive cannot beat on this path).
+Tiny reference models are trained for a few steps in a temporary folder on a short synthetic performance
+(motion world, 24 frames): speed does not depend on how well a model is trained, but it does on the canvas
+and the generator's shape. Each (track length, method, model) runs in its own subprocess (``python -m
+bench.drive``) so its peak RSS is its own.
+
+- 64² canvas, 1,000 vs 10,000 frames: whether memory stays flat. Baseline, measured in the same subprocess:
+  the generator alone on drive's runtime, batch 1, frame after frame (the floor drive cannot beat).
+- 256² canvas (issue #12: 25 frames/s on a laptop CPU): the whole command with today's default generator
+  against the same command with the old default (``base_channels`` 32) in the same run; and the two
+  generators alone.
 """
 
 from __future__ import annotations
@@ -20,19 +24,31 @@ from typing import Any
 
 CANVAS = 64
 METHODS = ("global-scale", "retarget")
+LARGE = 256  # the canvas of issue #12's drive rows
+# TrainConfig fields of the 256² default generator before issue #12 (the same-run baseline of the 256² rows).
+OLD_DEFAULT = {"base_channels": 32}
 
 
-def make_model(folder: Path) -> Path:
-    """Train a reference model a few steps on a 24-frame synthetic performance; returns its path."""
+def make_model(folder: Path, size: int = CANVAS, steps: int = 3, **config: Any) -> Path:
+    """Train a reference model a few steps on a 24-frame synthetic performance; returns its path.
+
+    Args:
+        folder: where the performance and the model go.
+        size: canvas size.
+        steps: training steps.
+        **config: TrainConfig fields other than ``size``.
+    """
     from clone.demo import demo_motions
     from clone.synth import get_character, save_performance
     from clone.train_ref import TrainConfig, train_reference
 
-    skeleton, look, _ = get_character("tall_long_legs")
-    ref = save_performance(folder / "reference", demo_motions()["reference"], skeleton, look, yaw=15.0,
-                           size=128, frames=24)
-    out = folder / "ref_model.pt"
-    train_reference(ref / "poses.npz", ref / "frames", out, config=TrainConfig(size=CANVAS), steps=3)
+    render = max(128, size)
+    ref = folder / f"reference_{render}"
+    if not ref.is_dir():
+        skeleton, look, _ = get_character("tall_long_legs")
+        save_performance(ref, demo_motions()["reference"], skeleton, look, yaw=15.0, size=render, frames=24)
+    out = folder / f"ref_model_{size}_{len(list(folder.glob('ref_model_*.pt')))}.pt"
+    train_reference(ref / "poses.npz", ref / "frames", out, config=TrainConfig(size=size, **config), steps=steps)
     return out
 
 
@@ -40,29 +56,32 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     import torch
 
     from bench.harness import peak_rss_mb, time_call
-    from clone.drive import drive
+    from clone.drive import build_drive_generator, drive
     from clone.networks import generator_input
     from clone.reference_model import load_reference_model
 
     torch.set_num_threads(1)
+    runtime = args.get("runtime", "auto")
     t0 = time.perf_counter()
     result = drive(args["driver"], args["out"], model_path=args["model"], method=args["method"], device="cpu",
-                   overwrite=True)
+                   overwrite=True, runtime=runtime)
     seconds = time.perf_counter() - t0
     peak = peak_rss_mb()
     model = load_reference_model(args["model"])
-    net = model.build_generator("cpu")
+    net = build_drive_generator(model, torch.device("cpu"), runtime)  # what drive ran
     size = model.canvas.size
     pose, prev = torch.zeros(1, 3, size, size), torch.zeros(1, 3, size, size)
+    plate = model.plate_tensor("cpu")  # [1, 3, S, S], None for a model trained without one
 
     def generator_only() -> None:
         with torch.inference_mode():
             for _ in range(50):
-                net(generator_input(pose, prev))
+                net(generator_input(pose, prev), plate)
 
     gen = time_call(generator_only, 5, 1)
     return {"frames": result.frames, "seconds": seconds, "fps": result.frames / seconds, "peak_rss_mb": peak,
-            "generator_fps": gen.rate(50), "canvas": size, "mp4_bytes": Path(args["out"]).stat().st_size}
+            "generator_fps": gen.rate(50), "canvas": size, "mp4_bytes": Path(args["out"]).stat().st_size,
+            "base_channels": model.generator_config.base_channels}
 
 
 def run(quick: bool = False, **_: object) -> dict[str, Any]:
@@ -83,8 +102,9 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
                 r = run_child("bench.drive", {"driver": str(driver), "out": str(tmp / f"out_{frames}_{method}.mp4"),
                                               "model": str(model), "method": method})
                 rows.append(row(f"{frames:,} frames, {CANVAS}² canvas", f"drive --method {method}", r["fps"],
-                                "frames/s", r["generator_fps"], "generator alone (inference mode, batch 1)",
+                                "frames/s", r["generator_fps"], "generator alone (drive's runtime, batch 1)",
                                 peak_rss_mb=round(r["peak_rss_mb"], 1), seconds=round(r["seconds"], 2)))
+        rows += large_rows(tmp, source, 100 if quick else 300)
         return {
             "rows": rows,
             "notes": [
@@ -92,10 +112,49 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
                 f"24-frame synthetic performance in a temp dir ({train_s:.0f} s); 1 thread; one subprocess each"),
                 ("frames/s counts the whole call (load model, read + fill track, move poses, draw, generate, encode); "
                 "peak_rss_mb is the subprocess's VmHWM"),
+                (f"{LARGE}² rows: TrainConfig(size={LARGE}) (today's default) against TrainConfig(size={LARGE}, "
+                f"**{OLD_DEFAULT}) (the old default) on torch, each trained 1 step, driven with --method "
+                "global-scale; the generator on 1 thread (torch or ONNX Runtime), drawing and encoding in drive's "
+                "own threads, x264 in its own process; 'generator alone' runs the same runtime, batch 1"),
             ],
         }
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def large_rows(tmp: Path, source: Any, frames: int) -> list[dict[str, Any]]:
+    """Issue #12's rows: drive at 256², whole command and generator alone, today's default vs the old one."""
+    from bench.data import tiled
+    from bench.harness import row, run_child
+    from pose_io.writers import write_track
+
+    driver = write_track(tiled(source, frames), tmp / f"driver_large_{frames}.npz")
+    import torch
+
+    from clone.onnx_generator import generator_runtime
+
+    models = {"default": make_model(tmp, LARGE, steps=1), "old": make_model(tmp, LARGE, steps=1, **OLD_DEFAULT)}
+    # The baseline is the state before issue #12: the old default generator on torch.
+    runs = [("old", "torch"), ("default", "torch")]
+    fast = generator_runtime("auto", torch.device("cpu"))
+    if fast != "torch":
+        runs.append(("default", fast))
+    results = {}
+    for name, runtime in runs:
+        results[name, runtime] = run_child("bench.drive", {
+            "driver": str(driver), "out": str(tmp / f"out_large_{name}_{runtime}.mp4"), "model": str(models[name]),
+            "method": "global-scale", "runtime": runtime})
+    old = results["old", "torch"]
+    old_name = "old default (" + ", ".join(f"{k} {v}" for k, v in OLD_DEFAULT.items()) + "), torch"
+    rows = []
+    for name, runtime in runs[1:]:
+        r = results[name, runtime]
+        variant = f"default (base_channels {r['base_channels']}), {runtime}"
+        rows.append(row(f"{frames:,} frames, {LARGE}² canvas", f"drive, {variant}", r["fps"], "frames/s", old["fps"],
+                        f"drive, {old_name}", peak_rss_mb=round(r["peak_rss_mb"], 1), seconds=round(r["seconds"], 2)))
+        rows.append(row(f"generator alone, {LARGE}², 1 thread", variant, r["generator_fps"], "frames/s",
+                        old["generator_fps"], old_name))
+    return rows
 
 
 if __name__ == "__main__":

@@ -8,7 +8,9 @@ frame, as ``clone.drive.generate_frames`` runs a temporal generator.
 Baseline: eager fp32 with autograd on (eval mode). Options: ``inference_mode`` (what clone/drive.py uses
 today), ``channels_last`` (+ inference mode), ``bf16_autocast`` (CPU autocast + inference mode),
 ``jit_trace_freeze`` (``torch.jit.freeze(torch.jit.trace(...))`` under no_grad), ``compile``
-(``torch.compile`` default mode, inference mode; its compile time is recorded). ``max_abs_diff`` is each
+(``torch.compile`` default mode, inference mode; its compile time is recorded), ``onnxruntime`` (the
+generator exported to ONNX and run by ONNX Runtime, what ``clone drive`` uses on a CPU when the ``fast`` extra
+is installed; the export is ``prepare_s``). ``max_abs_diff`` is each
 option's largest output difference from fp32 eager on the same input (outputs are in [-1, 1]).
 """
 
@@ -20,49 +22,60 @@ import sys
 import time
 from typing import Any
 
-OPTIONS = ("eager_grad", "inference_mode", "channels_last", "bf16_autocast", "jit_trace_freeze", "compile")
+OPTIONS = ("eager_grad", "inference_mode", "channels_last", "bf16_autocast", "jit_trace_freeze", "compile",
+           "onnxruntime")
 BASELINE = "eager_grad"
 
 
-def _runner(option: str, net: Any, x: Any) -> tuple[Any, float]:
-    """(zero-argument call producing [1, 3, S, S], seconds spent preparing / compiling)."""
+def _runner(option: str, net: Any, x: Any, plate: Any = None) -> tuple[Any, float]:
+    """(zero-argument call producing [1, 3, S, S], seconds spent preparing / compiling).
+
+    ``plate`` ([1, 3, S, S] or None) is passed to every call: a generator with a background plate needs it.
+    """
     import torch
 
     t0 = time.perf_counter()
     if option == "eager_grad":
         def call() -> Any:
             with torch.enable_grad():
-                return net(x)
+                return net(x, plate)
     elif option == "inference_mode":
         def call() -> Any:
             with torch.inference_mode():
-                return net(x)
+                return net(x, plate)
     elif option == "channels_last":
         net = net.to(memory_format=torch.channels_last)
         xc = x.contiguous(memory_format=torch.channels_last)
 
         def call() -> Any:
             with torch.inference_mode():
-                return net(xc)
+                return net(xc, plate)
     elif option == "bf16_autocast":
         def call() -> Any:
             with torch.inference_mode(), torch.autocast("cpu", dtype=torch.bfloat16):
-                return net(x)
+                return net(x, plate)
     elif option == "jit_trace_freeze":
         with torch.no_grad():
-            traced = torch.jit.freeze(torch.jit.trace(net, x))
+            traced = torch.jit.freeze(torch.jit.trace(net, (x, plate) if plate is not None else x))
 
         def call() -> Any:
             with torch.no_grad():
-                return traced(x)
+                return traced(x, plate) if plate is not None else traced(x)
     elif option == "compile":
         compiled = torch.compile(net)
         with torch.inference_mode():
-            compiled(x)  # compiles
+            compiled(x, plate)  # compiles
 
         def call() -> Any:
             with torch.inference_mode():
-                return compiled(x)
+                return compiled(x, plate)
+    elif option == "onnxruntime":
+        from clone.onnx_generator import OnnxGenerator
+
+        session = OnnxGenerator(net, x.shape[-1], plate is not None, threads=torch.get_num_threads())
+
+        def call() -> Any:
+            return session(x, plate)
     else:
         raise ValueError(f"unknown option {option!r}; valid: {', '.join(OPTIONS)}")
     return call, time.perf_counter() - t0
@@ -82,8 +95,9 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     config = TrainConfig(size=size).generator_config()
     net = UNetGenerator(config).eval()
     x = torch.rand(1, config.in_channels, size, size) * 2 - 1  # [1, 6, S, S]
+    plate = torch.rand(1, 3, size, size) * 2 - 1 if config.uses_plate else None  # [1, 3, S, S]
     rss_before = rss_mb()
-    call, prepare_s = _runner(option, net, x)
+    call, prepare_s = _runner(option, net, x, plate)
     t0 = time.perf_counter()
     call()  # first warm-up call; a slow option (seconds per frame) gets no further warm-up and 3 samples
     slow = time.perf_counter() - t0 > 1.0
@@ -93,7 +107,7 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     with torch.no_grad():
         ref = UNetGenerator(config).eval()
         ref.load_state_dict({k: v.contiguous() for k, v in net.state_dict().items()})
-        diff = float((call().float().contiguous() - ref(x)).abs().max())
+        diff = float((call().float().contiguous() - ref(x, plate)).abs().max())
     return {"fps": timing.rate(1), "median_s": timing.median_s, "peak_rss_mb": peak, "rss_before_mb": rss_before,
             "rss_delta_mb": peak - rss_before, "prepare_s": prepare_s, "max_abs_diff": diff,
             "generator": config.to_dict()}
@@ -115,8 +129,13 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
 
     sizes = (128, 256)
     threads_list = (1,) if quick else (1, 2)
-    options = [o for o in OPTIONS if not (quick and o == "compile")]
+    from clone.onnx_generator import onnx_available
+
     rows, notes = [], []
+    options = [o for o in OPTIONS if not (quick and o == "compile")]
+    if not onnx_available():
+        options.remove("onnxruntime")
+        notes.append("onnxruntime not measured: the optional extra `fast` is not installed")
     slow_bf16: dict[int, float] = {}  # threads -> bf16 speed-up at 128²
     for size in sizes:
         for threads in threads_list:
@@ -149,8 +168,9 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
         notes.append("--quick: 1 thread only, compile skipped")
     notes.append("peak RSS per configuration from a fresh subprocess (VmHWM); rss_delta = peak - RSS after "
                  "importing torch and building model + input")
-    notes.append("clone/drive.py runs the generator under torch.inference_mode (the inference_mode row); an option "
-                 "is worth switching to at > 1.3x that row with max_abs_diff < 1e-2")
+    notes.append("clone/drive.py runs the generator on ONNX Runtime when the `fast` extra is installed (the onnxruntime "
+                 "row), else under torch.inference_mode (the inference_mode row); an option is worth switching to at "
+                 "> 1.3x that row with max_abs_diff < 1e-2")
     return {"rows": rows, "notes": notes}
 
 

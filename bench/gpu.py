@@ -21,7 +21,7 @@ def _rates(device: Any, quick: bool) -> tuple[float, float]:
     trainer = Trainer(config, device)
     s = config.size
     sample = {k: torch.rand(1, 3, s, s, device=device) * 2 - 1
-              for k in ("pose_prev", "pose_cur", "frame_prev", "frame_cur")}  # each [1, 3, S, S]
+              for k in ("pose_prev", "pose_cur", "frame_prev", "frame_cur", "plate")}  # each [1, 3, S, S]
     sample["has_prev"] = torch.ones(1, dtype=torch.bool, device=device)
     gen = torch.Generator().manual_seed(0)
     sync = torch.cuda.synchronize if device.type == "cuda" else (lambda: None)
@@ -33,7 +33,7 @@ def _rates(device: Any, quick: bool) -> tuple[float, float]:
     def frames() -> None:
         with torch.inference_mode():
             for _ in range(10):
-                trainer.g(generator_input(sample["pose_cur"], sample["frame_prev"]))
+                trainer.g(generator_input(sample["pose_cur"], sample["frame_prev"]), sample["plate"])
         sync()
 
     reps = 3 if quick else 5

@@ -10,6 +10,8 @@
 3. Draw each frame's pose map on the reference's canvas and run the generator frame after frame, each frame
    conditioned on the one it generated before (the first on zeros, as in training).
 4. Write an H.264 mp4 at the driver's fps, one frame at a time: memory does not grow with the track.
+
+Drawing, the generator and the encoder run side by side in threads (:mod:`clone.pipeline`).
 """
 
 from __future__ import annotations
@@ -18,16 +20,19 @@ import logging
 import os
 import time
 from collections.abc import Callable, Iterator
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
+from torch import Tensor
 
 from clone.canvas import full_frame_canvas, image_to_canvas, render_pose_map
 from clone.choices import Method, StageMode
 from clone.networks import generator_input
+from clone.pipeline import BackgroundSink, prefetch
 from clone.reference_model import LAYOUT, ReferenceModel, file_sha256, load_reference_model
 from clone.stage import StageFit, fit_to_stage
 from clone.tensors import to_images, to_tensor
@@ -175,45 +180,89 @@ def move_onto_reference(
 # ------------------------------------------------------------------------------------------------ frames
 
 
+def draw_pose_maps(model: ReferenceModel, track: PoseTrack, chunk: int = 16) -> Iterator[np.ndarray]:
+    """The pose maps of a track in the reference's pixels, drawn on the reference's canvas.
+
+    Args:
+        model: the reference model (its canvas).
+        track: body15 poses in the reference's image pixels.
+        chunk: frames per yielded array.
+
+    Yields:
+        [C, S, S, 3] uint8 RGB pose maps, ``C = chunk`` except perhaps for the last.
+    """
+    for start in range(0, track.num_frames, chunk):
+        joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
+        yield np.stack([render_pose_map(j, model.canvas.size, track.joint_layout) for j in joints])  # [C, S, S, 3]
+
+
+def build_drive_generator(model: ReferenceModel, device: torch.device, runtime: str = "auto") -> Callable[..., Tensor]:
+    """The model's generator, ready to drive: the torch module, or its ONNX Runtime export.
+
+    Args:
+        model: the reference model.
+        device: where the generator runs.
+        runtime: ``auto`` (ONNX Runtime on a CPU when the ``fast`` extra is installed), ``torch`` or ``onnx``
+            (see :func:`clone.onnx_generator.generator_runtime`).
+
+    Returns:
+        ``net(x, plate) -> frame`` on [B, C_in, S, S] / [1, 3, S, S] tensors on ``device``.
+    """
+    from clone.onnx_generator import OnnxGenerator, generator_runtime
+
+    try:
+        runtime = generator_runtime(runtime, device)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    net = model.build_generator(device)
+    if runtime == "torch":
+        return net
+    log.info("running the generator on ONNX Runtime")
+    return OnnxGenerator(net, model.canvas.size, model.generator_config.uses_plate)
+
+
 def generate_frames(
-    model: ReferenceModel, track: PoseTrack, device: torch.device | str = "cpu", chunk: int = 16
+    model: ReferenceModel, track: PoseTrack, device: torch.device | str = "cpu", chunk: int = 16,
+    runtime: str = "auto",
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """Run the generator over a track in the reference's pixels.
 
-    Pose maps are drawn and moved to the device ``chunk`` frames at a time; a temporal generator then runs
-    frame after frame on its own previous output, a non-temporal one on the whole chunk. A generator trained
-    with a background plate composites its frames over the plate stored in the model.
+    Pose maps are drawn (in a background thread, :func:`draw_pose_maps`) and moved to the device ``chunk``
+    frames at a time; a temporal generator then runs frame after frame on its own previous output (each
+    frame yielded as soon as it is made), a non-temporal one on the whole chunk. A generator trained with a
+    background plate composites its frames over the plate stored in the model.
 
     Args:
         model: the reference model.
         track: body15 poses in the reference's image pixels.
         device: where the generator runs.
         chunk: frames per batch of pose maps.
+        runtime: ``auto``, ``torch`` or ``onnx`` (see :func:`build_drive_generator`).
 
     Yields:
         ``(pose map, frame)`` per track frame, both [S, S, 3] uint8 RGB.
     """
     device = torch.device(device)
-    net = model.build_generator(device)
-    size, layout = model.canvas.size, track.joint_layout
+    net = build_drive_generator(model, device, runtime)
+    size = model.canvas.size
     prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
     plate = model.plate_tensor(device)  # [1, 3, S, S], or None for a model trained without one
-    for start in range(0, track.num_frames, chunk):
-        joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
-        maps = np.stack([render_pose_map(j, size, layout) for j in joints])  # [C, S, S, 3]
+    # Later chunks are drawn in a thread while the generator works on this one (clone.pipeline).
+    for maps in prefetch(draw_pose_maps(model, track, chunk), depth=2, name="draw-pose-maps"):
         # The grad mode is entered and left between yields: a context held across a yield would leak into
         # the caller, and interleaved streams would restore each other's modes in the wrong order.
         with torch.inference_mode():
             pose = to_tensor(maps).to(device)  # [C, 3, S, S]
-            if model.temporal:
-                outs = []
-                for i in range(len(pose)):
-                    prev = net(generator_input(pose[i:i + 1], prev), plate)  # [1, 3, S, S]
-                    outs.append(prev)
-                frames = to_images(torch.cat(outs))
-            else:
-                frames = to_images(net(pose, plate))
-        yield from zip(maps, frames)
+        if not model.temporal:
+            with torch.inference_mode():
+                frames = to_images(net(pose, plate))  # [C, S, S, 3]
+            yield from zip(maps, frames)
+            continue
+        for i in range(len(maps)):  # one frame at a time, so the encoder gets each as soon as it is made
+            with torch.inference_mode():
+                prev = net(generator_input(pose[i:i + 1], prev), plate)  # [1, 3, S, S]
+                frame = to_images(prev)[0]  # [S, S, 3]
+            yield maps[i], frame
 
 
 def side_by_side_frame(driver_joints: np.ndarray, driver_canvas: Any, pose_map: np.ndarray, frame: np.ndarray,
@@ -253,6 +302,7 @@ def drive(
     overwrite: bool = False,
     max_gap: int = 5,
     progress: Callable[[int, int], None] | None = None,
+    runtime: str = "auto",
 ) -> DriveResult:
     """Make a video of the reference performing the driver's motion.
 
@@ -270,10 +320,13 @@ def drive(
         overwrite: replace existing outputs.
         max_gap: fill gaps of at most this many frames in the driver (0: none).
         progress: called with (frames done, total) after every frame.
+        runtime: the generator's runtime: ``auto`` (ONNX Runtime on a CPU when the ``fast`` extra is
+            installed, else torch), ``torch`` or ``onnx``.
 
     Returns:
         What was written.
     """
+    from clone.onnx_generator import generator_runtime
     from pose_io.video import VideoWriter
     from pose_io.writers import write_track
 
@@ -289,6 +342,10 @@ def drive(
         raise InputError(f"unknown --stage {stage!r}; valid: {', '.join(STAGES)}") from None
     if max_gap < 0:
         raise InputError(f"--max-gap must be >= 0, got {max_gap}")
+    try:
+        generator_runtime(runtime, torch.device(device))
+    except ValueError as err:
+        raise InputError(str(err)) from None
     check_new_output(out, overwrite)
     model = load_reference_model(model_path)
     driver = read_driver(driver_path, max_gap)
@@ -299,11 +356,21 @@ def drive(
 
     driver_canvas = full_frame_canvas(driver.image_size, model.canvas.size)
     total = driven.num_frames
-    with VideoWriter(out, fps=driven.fps, overwrite=overwrite) as video:
-        for t, (pose_map, frame) in enumerate(generate_frames(model, driven, device)):
-            if side_by_side:
-                frame = side_by_side_frame(driver.joints[t], driver_canvas, pose_map, frame, driver.joint_layout)
-            video.write(frame)
+
+    def encode(item: tuple[int, np.ndarray, np.ndarray]) -> None:
+        t, pose_map, frame = item
+        if side_by_side:
+            frame = side_by_side_frame(driver.joints[t], driver_canvas, pose_map, frame, driver.joint_layout)
+        video.write(frame)
+
+    # Three stages overlap: pose maps are drawn in a thread (generate_frames), the generator runs here, and
+    # frames go to the encoder from another thread; an error in any of them ends the with blocks, which
+    # stop the threads and remove the unfinished video.
+    with VideoWriter(out, fps=driven.fps, overwrite=overwrite) as video, \
+            BackgroundSink(encode, depth=4, name="encode") as sink, \
+            closing(generate_frames(model, driven, device, runtime=runtime)) as frames:
+        for t, (pose_map, frame) in enumerate(frames):
+            sink.put((t, pose_map, frame))
             if progress is not None:
                 progress(t + 1, total)
     if poses_path is not None:

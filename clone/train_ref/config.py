@@ -46,7 +46,7 @@ class TrainConfig:
         size: canvas size in pixels (power of two).
         canvas_mode: ``crop`` around the performer or ``full`` frame letterboxed.
         canvas_margin: crop margin as a fraction of the performer's height.
-        base_channels: generator width.
+        base_channels: generator width; None picks 16 for canvases of 256² and more, 32 below.
         upsample: generator decoder upsampling (see ``GeneratorConfig``).
         depth: generator depth; None picks a 4x4 bottleneck for ``size``.
         disc_channels: discriminator width.
@@ -74,7 +74,10 @@ class TrainConfig:
     size: int = 128
     canvas_mode: str = "crop"
     canvas_margin: float = 0.25
-    base_channels: int = 32
+    # None: 16 from 256² up, else 32 (fixed in __post_init__, so a stored run keeps its width). At 256² on one
+    # CPU thread 16 runs the generator 2.1-2.8x faster and, at equal CPU minutes of training, scored SSIM 0.949
+    # against 32's 0.954; at 128² it cost more (0.962 against 0.969, 0.835 against 0.861 on the person's crop).
+    base_channels: int | None = None
     # Not pix2pix's transposed convolutions: at the few thousand steps a CPU budget allows they still show
     # checkerboard patterns; nearest + 3x3 conv gave +1 dB PSNR at equal steps on synthetic performers.
     upsample: str = "nearest"
@@ -107,6 +110,8 @@ class TrainConfig:
             valid = ", ".join(s.value for s in PrevSource)
             raise ValueError(f"unknown prev_source {self.prev_source!r}; valid: {valid}") from None
         object.__setattr__(self, "prev_source", source)
+        if self.base_channels is None:
+            object.__setattr__(self, "base_channels", 16 if self.size >= 256 else 32)
 
     def generator_config(self) -> GeneratorConfig:
         """The generator this run trains."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import threading
 from pathlib import Path
 
 import imageio_ffmpeg
@@ -12,7 +13,8 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.drive import drive_poses, generate_frames, move_onto_reference
+from clone.drive import drive, drive_poses, generate_frames, move_onto_reference
+from clone.onnx_generator import onnx_available
 from clone.reference_model import file_sha256, load_reference_model
 from clone.stage import reference_stage
 from pose_io.errors import InputError
@@ -201,6 +203,62 @@ def test_generation_is_deterministic_and_global_scale_lands_on_the_reference(tra
     big = ref.replace(joints=ref.joints * 2.0, image_size=(2 * ref.image_size[0], 2 * ref.image_size[1]))
     moved = move_onto_reference(big, model, "global-scale")
     np.testing.assert_allclose(moved.joints, ref.joints, atol=0.05)
+
+
+@pytest.mark.parametrize("stage", ["draw", "encode"])
+def test_a_failing_stage_ends_drive_with_its_error_and_leaves_nothing(trained, driver, tmp_path, monkeypatch, stage):
+    """Drawing and encoding run in threads beside the generator: their errors still reach the caller, the
+    unfinished video is removed and no thread is left running."""
+    import clone.drive as drive_module
+    from pose_io.video import VideoWriter
+
+    calls = []
+
+    def fail_after(original):
+        def wrapped(*args, **kwargs):
+            calls.append(1)
+            if len(calls) > 20:
+                raise OSError(f"{stage} broke")
+            return original(*args, **kwargs)
+        return wrapped
+
+    if stage == "draw":
+        monkeypatch.setattr(drive_module, "render_pose_map", fail_after(drive_module.render_pose_map))
+    else:
+        monkeypatch.setattr(VideoWriter, "write", fail_after(VideoWriter.write))
+    threads = set(threading.enumerate())
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    with pytest.raises(OSError, match=f"{stage} broke"):
+        drive_module.drive(driver, out_dir / "out.mp4", model_path=trained, method="none")
+    assert list(out_dir.iterdir()) == []  # neither the video nor its temp file
+    assert set(threading.enumerate()) <= threads
+
+
+@pytest.mark.skipif(not onnx_available(), reason="needs the optional extra `fast` (onnxruntime, onnx)")
+def test_onnx_runtime_makes_the_frames_torch_makes(trained):
+    model = load_reference_model(trained)
+    track = model.reference_track.frames(0, 8)
+    torch_frames = [f for _, f in generate_frames(model, track, chunk=3, runtime="torch")]
+    onnx_frames = [f for _, f in generate_frames(model, track, chunk=3, runtime="onnx")]
+    assert len(onnx_frames) == 8
+    for a, b in zip(torch_frames, onnx_frames):  # uint8 frames: float rounding may flip one level
+        assert np.abs(a.astype(int) - b.astype(int)).max() <= 1
+
+
+def test_runtime_choice(monkeypatch, trained, driver, tmp_path):
+    from clone import onnx_generator
+
+    cpu, gpu = torch.device("cpu"), torch.device("cuda")
+    assert onnx_generator.generator_runtime("torch", cpu) == "torch"
+    assert onnx_generator.generator_runtime("auto", gpu) == "torch"
+    with pytest.raises(ValueError, match="valid: auto, torch, onnx"):
+        onnx_generator.generator_runtime("tensorrt", cpu)
+    monkeypatch.setattr(onnx_generator, "onnx_available", lambda: False)
+    assert onnx_generator.generator_runtime("auto", cpu) == "torch"
+    with pytest.raises(InputError, match=r"clone2d\[fast\]"):
+        drive(driver, tmp_path / "out.mp4", model_path=trained, method="none", runtime="onnx")
+    assert not (tmp_path / "out.mp4").exists()
 
 
 def test_interleaved_generation_streams_leave_autograd_alone(trained):

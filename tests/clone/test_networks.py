@@ -166,3 +166,16 @@ def test_plate_input_generator_sees_the_plate():
     # Older configs (no plate fields) read as generators without a plate.
     old = {k: v for k, v in GeneratorConfig().to_dict().items() if k not in ("alpha", "plate_input")}
     assert GeneratorConfig.from_dict(old) == GeneratorConfig()
+
+
+def test_default_generator_width_follows_the_canvas_and_stored_runs_keep_theirs():
+    from clone.train_ref import TrainConfig
+
+    # Issue #12: 16 channels from 256² up (2.1-2.8x faster there at -0.005 SSIM), 32 below.
+    assert TrainConfig(size=128).generator_config().base_channels == 32
+    assert TrainConfig(size=256).generator_config().base_channels == 16
+    assert TrainConfig(size=256, base_channels=24).base_channels == 24
+    # A run stored with the old 256² default (32) rebuilds its own generator, not today's default.
+    stored = TrainConfig(size=256, base_channels=32).to_dict()
+    assert TrainConfig.from_dict(stored).generator_config().base_channels == 32
+    assert TrainConfig.from_dict(TrainConfig(size=512).to_dict()) == TrainConfig(size=512)
