@@ -218,14 +218,51 @@ def conversion_plan(source: JointLayout, target: JointLayout) -> list[tuple[int,
     Returns:
         A list of ``len(target)`` tuples of source indices.
     """
-    plan: list[tuple[int, ...]] = []
-    for name in target.joints:
-        if source.has(name):
-            plan.append((source.index(name),))
-        elif name in DERIVED and all(source.has(n) for n in DERIVED[name]):
-            plan.append(tuple(source.index(n) for n in DERIVED[name]))
-        else:
-            plan.append(())
+    return list(_plan(source, target).sources)
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """A conversion worked out once per pair of layouts (:func:`_plan`): what :func:`conversion_plan` returns,
+    and the same as slices for :func:`convert_arrays`."""
+
+    sources: tuple[tuple[int, ...], ...]  # per target joint, as conversion_plan
+    copies: tuple[tuple[slice, slice], ...]  # (target joints, source joints): runs copied from one joint each
+    derived: tuple[tuple[int, list[int]], ...]  # (target joint, its source joints) made as a mean of several
+    complete: bool  # every target joint can be made (nothing stays NaN by default)
+
+
+_PLANS: dict[tuple[str, tuple[str, ...], str, tuple[str, ...]], _Plan] = {}
+
+
+def _plan(source: JointLayout, target: JointLayout) -> _Plan:
+    """The conversion of ``source`` into ``target``, cached by their names and joints (layouts are data)."""
+    key = (source.name, source.joints, target.name, target.joints)
+    plan = _PLANS.get(key)
+    if plan is None:
+        sources: list[tuple[int, ...]] = []
+        for name in target.joints:
+            if source.has(name):
+                sources.append((source.index(name),))
+            elif name in DERIVED and all(source.has(n) for n in DERIVED[name]):
+                sources.append(tuple(source.index(n) for n in DERIVED[name]))
+            else:
+                sources.append(())
+        runs: list[list[int]] = []  # [target start, source start, length] of consecutive copies
+        for j, src in enumerate(sources):
+            if len(src) != 1:
+                continue
+            if runs and runs[-1][0] + runs[-1][2] == j and runs[-1][1] + runs[-1][2] == src[0]:
+                runs[-1][2] += 1
+            else:
+                runs.append([j, src[0], 1])
+        plan = _Plan(
+            tuple(sources),
+            tuple((slice(j, j + n), slice(i, i + n)) for j, i, n in runs),
+            tuple((j, list(src)) for j, src in enumerate(sources) if len(src) > 1),
+            all(sources),
+        )
+        _PLANS[key] = plan
     return plan
 
 
@@ -241,20 +278,39 @@ def convert_arrays(
     """
     if source.name == target.name:
         return joints.astype(np.float32, copy=True), confidence.astype(np.float32, copy=True)
-    t = joints.shape[0]
-    out = np.full((t, len(target), 2), np.nan, dtype=np.float32)
-    conf = np.zeros((t, len(target)), dtype=np.float32)
-    for j, src in enumerate(conversion_plan(source, target)):
-        if not src:
-            continue
-        idx = list(src)
-        # NaN propagates: a derived joint with a missing part is missing.
-        out[:, j] = joints[:, idx].mean(axis=1)
+    plan = _plan(source, target)
+    out = convert_joints(joints, source, target)
+    conf = np.empty((joints.shape[0], len(target)), dtype=np.float32)
+    if not plan.complete:
+        conf.fill(0.0)
+    for to, of in plan.copies:
+        conf[:, to] = confidence[:, of]
+    for j, idx in plan.derived:
         conf[:, j] = confidence[:, idx].min(axis=1)
-    missing = np.isnan(out).any(axis=-1)
-    out[missing] = np.nan
-    conf[missing] = 0.0
+    missing = np.isnan(out[..., 0])  # [T, Jt]: convert_joints made both coordinates NaN
+    if missing.any():
+        conf[missing] = 0.0
     return out, conf
+
+
+def convert_joints(joints: np.ndarray, source: JointLayout, target: JointLayout) -> np.ndarray:
+    """The joints of :func:`convert_arrays` alone: ``[T, Js, 2]`` in ``source`` -> ``[T, Jt, 2]`` float32."""
+    if source.name == target.name:
+        return joints.astype(np.float32, copy=True)
+    plan = _plan(source, target)
+    out = np.empty((joints.shape[0], len(target), 2), dtype=np.float32)
+    if not plan.complete:
+        out.fill(np.nan)
+    for to, of in plan.copies:
+        # "+ 0" is what the mean of one value gave (it turns -0.0 into 0.0): the same numbers, one pass.
+        np.add(joints[:, of], np.float32(0.0), out=out[:, to], casting="same_kind")
+    for j, idx in plan.derived:
+        out[:, j] = joints[:, idx].mean(axis=1)  # NaN propagates: a derived joint with a missing part is missing
+    nan = np.isnan(out)
+    missing = nan[..., 0] | nan[..., 1]  # [T, Jt]
+    if missing.any():
+        out[missing] = np.nan
+    return out
 
 
 def require_convertible(source: JointLayout, target: JointLayout, needed: tuple[str, ...] | None = None) -> None:

@@ -114,8 +114,7 @@ def real_array(values: object, what: str) -> np.ndarray:
     if arr.dtype.kind not in "iuf":
         raise InputError(f"{what}: must hold real numbers, got dtype {arr.dtype}")
     if arr.dtype.kind == "f" and arr.size:
-        with np.errstate(invalid="ignore"):
-            magnitude = float(np.nanmax(np.abs(arr))) if not np.isnan(arr).all() else 0.0
+        magnitude = _magnitude(arr)
         if math.isinf(magnitude):
             raise InputError(f"{what}: has infinite values")
         if magnitude > FLOAT32_MAX:
@@ -128,6 +127,8 @@ def check_coordinate_range(joints: np.ndarray, image_size: tuple[int, int], what
     """InputError when a visible joint of [T, J, 2] ``joints`` lies more than TRACK_RANGE image sizes out."""
     w, h = image_size
     reach = TRACK_RANGE * max(w, h)
+    if _within(joints, -reach, min(w, h) + reach):  # the common case, two reductions and no temporaries
+        return
     with np.errstate(invalid="ignore"):
         far = ((joints < -reach) | (joints > np.array([w, h]) + reach)).any(axis=-1)  # [T, J], NaN -> False
     if far.any():
@@ -143,6 +144,10 @@ def check_coordinate_range(joints: np.ndarray, image_size: tuple[int, int], what
 def outlier_mask(xy: np.ndarray, image_size: tuple[int, int] | None) -> np.ndarray:
     """Which joints of a set of poses are outliers (rules in the module docstring).
 
+    Linear in the number of joints. With a known image size, a source without any coordinate beyond rule
+    1's bounds (nearly every one) is settled by a NaN-ignoring min and max; otherwise x and y are worked on
+    as [N, J] planes (numpy reduces short axes slowly) and the medians come from partitions.
+
     Args:
         xy: [N, J, 2] pixel coordinates of N poses (any frames, any people of one source), NaN where missing.
         image_size: (width, height) of the image, or None when it is unknown (to be inferred).
@@ -150,15 +155,24 @@ def outlier_mask(xy: np.ndarray, image_size: tuple[int, int] | None) -> np.ndarr
     Returns:
         [N, J] bool, True for the outliers (never for a missing joint).
     """
-    xy = np.asarray(xy, dtype=np.float64)
-    visible = ~np.isnan(xy).any(axis=-1)  # [N, J]
+    values = xy if isinstance(xy, np.ndarray) and xy.dtype.kind == "f" else np.asarray(xy, dtype=np.float64)
+    if image_size is not None:
+        size = np.array(image_size, dtype=np.float64)
+        margin = OUTLIER_IMAGE_MARGIN * max(float(size.max()), 1.0)
+        # Rule 1 needs a coordinate beyond [-margin, size + margin]: none beyond the narrower [-margin,
+        # min(size) + margin] means no outlier (float32 -> float64 is exact, so the bounds compare alike).
+        if _within(values, -margin, float(size.min()) + margin):
+            return np.zeros(values.shape[:2], dtype=bool)
+    xy = np.asarray(values, dtype=np.float64)
+    x, y = np.ascontiguousarray(xy[..., 0]), np.ascontiguousarray(xy[..., 1])  # [N, J] each
+    visible = ~(np.isnan(x) | np.isnan(y))  # [N, J]
     out = np.zeros(visible.shape, dtype=bool)
     if not visible.any():
         return out
-    centre = _row_nanmedian(xy)  # [N, 2], NaN for a pose without visible joints
-    dist = np.linalg.norm(xy - centre[:, None], axis=-1)  # [N, J], NaN where missing
-    spread = _row_nanmedian(dist)  # [N]
-    judged = visible.sum(axis=1) >= MIN_BODY_JOINTS  # [N]
+    dx, dy = x - _row_nanmedian(x)[:, None], y - _row_nanmedian(y)[:, None]  # from the pose's median joint
+    dist = np.sqrt(dx * dx + dy * dy)  # [N, J] np.linalg.norm's sum to the bit; NaN where missing
+    spread = _row_nanmedian(dist)  # [N], NaN for a pose without visible joints
+    judged = np.count_nonzero(visible, axis=1) >= MIN_BODY_JOINTS  # [N]
     body = BODY_PER_SPREAD * float(np.median(spread[judged])) if judged.any() else 0.0
     with np.errstate(invalid="ignore"):
         near_body = judged[:, None] & (dist <= OUTLIER_BODY_SIZES * max(body, 1.0))  # [N, J]
@@ -168,23 +182,55 @@ def outlier_mask(xy: np.ndarray, image_size: tuple[int, int] | None) -> np.ndarr
         anchor = visible & near_body
         if not anchor.any():
             return out  # nothing to measure the image by; the inferred size's limit decides
-        lo, hi = xy[anchor].min(axis=0), xy[anchor].max(axis=0)
+        lo, hi = np.array([x[anchor].min(), y[anchor].min()]), np.array([x[anchor].max(), y[anchor].max()])
     margin = OUTLIER_IMAGE_MARGIN * max(float((hi - lo).max()), 1.0)
+    low, high = lo - margin, hi + margin  # [2]
     with np.errstate(invalid="ignore"):
-        far_image = ((xy < lo - margin) | (xy > hi + margin)).any(axis=-1)  # [N, J]
+        far_image = (x < low[0]) | (x > high[0]) | (y < low[1]) | (y > high[1])  # [N, J]
     return visible & far_image & ~near_body
 
 
-def _row_nanmedian(a: np.ndarray) -> np.ndarray:
-    """Median over axis 1 ignoring NaN ([N, J, ...] -> [N, ...]); NaN where a row has no value.
+def _within(values: np.ndarray, lo: float, hi: float) -> bool:
+    """Whether every non-NaN value lies in [lo, hi] (True when all are NaN); NaN-ignoring min and max."""
+    if not values.size:
+        return True
+    smallest, largest = float(np.fmin.reduce(values, axis=None)), float(np.fmax.reduce(values, axis=None))
+    if math.isnan(smallest):  # every value NaN
+        return True
+    return lo <= smallest and largest <= hi
 
-    ``np.nanmedian`` over a short axis goes through masked arrays and is ~20x slower on long tracks.
+
+def _magnitude(values: np.ndarray) -> float:
+    """Largest absolute value of a float array ignoring NaN (0 when all are NaN), without an ``abs`` copy."""
+    smallest, largest = float(np.fmin.reduce(values, axis=None)), float(np.fmax.reduce(values, axis=None))
+    return 0.0 if math.isnan(largest) else max(abs(smallest), abs(largest))
+
+
+def _row_nanmedian(a: np.ndarray) -> np.ndarray:
+    """Median of each row of [N, J] ignoring NaN -> [N]; NaN where a row has no value.
+
+    ``np.nanmedian`` over a short axis goes through masked arrays and is ~20x slower on long tracks; a sort is
+    more than a median needs. Rows are grouped by their count ``c`` of values (usually one or two groups);
+    a partition at ``c // 2`` (NaN goes last, as in a sort) puts the upper middle value there and only
+    smaller ones before it, so the lower middle of an even count is their maximum: the same two values, and
+    the same ``0.5 * (lo + hi)``, as a full sort gives.
     """
-    ordered = np.sort(a, axis=1)  # NaN sorts last
-    count = (~np.isnan(a)).sum(axis=1, keepdims=True)  # [N, 1, ...]
-    lo = np.take_along_axis(ordered, np.maximum(count - 1, 0) // 2, axis=1)  # the middle value(s) of the
-    hi = np.take_along_axis(ordered, np.minimum(count // 2, a.shape[1] - 1), axis=1)  # count valid ones
-    return np.where(count > 0, 0.5 * (lo + hi), np.nan)[:, 0]
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    count = a.shape[1] - np.count_nonzero(np.isnan(a), axis=1)  # [N]
+    out = np.full(len(a), np.nan)
+    for c in np.flatnonzero(np.bincount(count, minlength=a.shape[1] + 1)[1:]).tolist():
+        c += 1
+        rows = count == c
+        every = bool(rows.all())
+        hi = c // 2
+        part = np.partition(a if every else a[rows], hi, axis=1)  # [n, J]
+        upper = part[:, hi]
+        lower = upper if c % 2 else part[:, :hi].max(axis=1)
+        median = 0.5 * (lower + upper)
+        if every:
+            return median
+        out[rows] = median
+    return out
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,7 @@ every joint is found by name.
 
 from __future__ import annotations
 
+import functools
 import logging
 
 import numpy as np
@@ -17,6 +18,10 @@ log = logging.getLogger(__name__)
 
 # The ankle pair, in the order every per-foot array uses.
 ANKLES: tuple[str, ...] = ("l_ankle", "r_ankle")
+
+# segment_lengths of up to this many coordinates go through one transposed copy (fewest calls), longer ones
+# segment by segment (no track-sized temporaries: on 10,000 frames the copy's fresh pages cost more than it saved).
+_PLANES_UP_TO = 65_536
 
 # The bones whose lengths add up to a standing height: head, trunk, and the two legs (averaged).
 _HEIGHT_BONES: tuple[tuple[str, str], ...] = (("nose", "neck"), ("neck", "mid_hip")) + tuple(
@@ -49,7 +54,25 @@ def segment_lengths(joints: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     """
     joints = np.asarray(joints, dtype=np.float64)
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    return np.linalg.norm(joints[..., pairs[:, 0], :] - joints[..., pairs[:, 1], :], axis=-1)
+    if joints.shape[-1] != 2:
+        return np.linalg.norm(joints[..., pairs[:, 0], :] - joints[..., pairs[:, 1], :], axis=-1)
+    # sqrt(dx² + dy²) is np.linalg.norm's sum of two squares to the bit, without its slow 2-long reduction.
+    if joints.size > _PLANES_UP_TO:  # a long track: segment by segment, no temporary the size of the track
+        out = np.empty((*joints.shape[:-2], len(pairs)))
+        for i, (a, b) in enumerate(pairs.tolist()):
+            dx = joints[..., a, 0] - joints[..., b, 0]
+            dy = joints[..., a, 1] - joints[..., b, 1]
+            dx *= dx
+            dy *= dy
+            dx += dy
+            np.sqrt(dx, out=out[..., i])
+        return out
+    # Short: contiguous coordinate planes [J, 2, ...] (one transposing copy), fewest numpy calls.
+    lead = tuple(range(joints.ndim - 2))
+    planes = np.ascontiguousarray(joints.transpose(joints.ndim - 2, joints.ndim - 1, *lead))  # [J, 2, ...]
+    d = planes[pairs[:, 0]] - planes[pairs[:, 1]]  # [L, 2, ...]
+    lengths = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])  # [L, ...]
+    return lengths.transpose(*(a + 1 for a in lead), 0)  # [..., L]
 
 
 def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
@@ -62,11 +85,13 @@ def foot_points(joints: np.ndarray, layout: JointLayout) -> np.ndarray:
     Returns:
         [T, 2]; NaN where both ankles are missing.
     """
-    ankles = joints[:, layout.indices(ANKLES)]  # [T, 2 ankles, 2]
-    y = np.where(np.isnan(ankles[..., 1]), -np.inf, ankles[..., 1])  # [T, 2]
-    lower = np.argmax(y, axis=1)  # [T]
-    out = ankles[np.arange(len(joints)), lower].astype(np.float64)  # [T, 2]
-    out[~np.isfinite(y).any(axis=1)] = np.nan
+    left, right = (joints[:, i] for i in layout.indices(ANKLES))  # [T, 2] each
+    y_left, y_right = (np.where(np.isnan(a[:, 1]), -np.inf, a[:, 1]) for a in (left, right))  # [T]
+    right_lower = y_right > y_left  # [T]; a tie goes to the first ankle, as an argmax would
+    out = np.empty((len(joints), 2), dtype=np.float64)
+    for c in (0, 1):  # per coordinate: no slow 2-long axes
+        out[:, c] = np.where(right_lower, right[:, c], left[:, c])
+    out[~(np.isfinite(y_left) | np.isfinite(y_right))] = np.nan
     return out
 
 
@@ -124,14 +149,45 @@ def skeleton_heights(joints: np.ndarray, layout: JointLayout | str = "body15") -
         [N] float64 heights, NaN for a window where a bone is missing in every frame.
     """
     layout = as_layout(layout)
-    pairs = np.array([layout.indices(p) for p in _HEIGHT_BONES])
-    lengths = segment_lengths(joints, pairs)  # [N, T, 6]
-    seen = ~np.isnan(lengths).all(axis=1)  # [N, 6]
+    lengths = segment_lengths(joints, _height_pairs(layout.name, layout.joints))  # [N, T, 6]
+    missing = np.isnan(lengths)  # [N, T, 6]
+    seen = ~missing.all(axis=1)  # [N, 6]
     bones = np.full(lengths.shape[::2], np.nan)  # [N, 6]
     for n in range(len(lengths)):
         if seen[n].all():
-            bones[n] = np.nanmedian(lengths[n], axis=0)
+            # np.median is nanmedian's result when nothing is missing (tested), minus its masked-array overhead
+            gaps = missing[n].any()
+            bones[n] = np.nanmedian(lengths[n], axis=0) if gaps else median_of(lengths[n])
     return bones[:, 0] + bones[:, 1] + 0.5 * bones[:, 2:].sum(axis=1)
+
+
+@functools.lru_cache(maxsize=32)
+def _height_pairs(name: str, joints: tuple[str, ...]) -> np.ndarray:
+    """[6, 2] joint index pairs of the height's bones in a layout (cached: layouts are data)."""
+    index = {n: i for i, n in enumerate(joints)}
+    try:
+        pairs = np.array([[index[a], index[b]] for a, b in _HEIGHT_BONES])
+    except KeyError as exc:  # what layout.index would say
+        raise KeyError(f"layout {name} has no joint {exc.args[0]!r}; joints: {', '.join(joints)}") from None
+    pairs.setflags(write=False)  # shared by every call
+    return pairs
+
+
+def median_of(values: np.ndarray, axis: int = 0) -> np.ndarray:
+    """``np.median(values, axis)`` of a float array without NaN, to the bit, at a fraction of its overhead.
+
+    The same partition around the middle and the same mean of the middle value(s) as ``np.median``, without
+    its generic checks (a single track's measures call it a few times; for 120 frames that overhead is most
+    of the time). NaN must be handled by the caller (``np.nanmedian``).
+    """
+    n = values.shape[axis]
+    if n == 0:
+        return np.median(values, axis=axis)
+    k = n // 2
+    middle = slice(k, k + 1) if n % 2 else slice(k - 1, k + 1)
+    part = np.partition(values, [middle.start, middle.stop - 1] if n % 2 == 0 else k, axis=axis)
+    # np.mean of the middle value(s): their sum divided by their count, in the array's float type
+    return np.add.reduce(part[(slice(None),) * (axis % values.ndim) + (middle,)], axis=axis) / (2 - n % 2)
 
 
 def skeleton_height(joints: np.ndarray, layout: JointLayout | str = "body15") -> float:

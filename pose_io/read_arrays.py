@@ -9,8 +9,10 @@ in the number of rows.
 from __future__ import annotations
 
 import csv
+import io
 import itertools
 import math
+import re
 import zipfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -43,23 +45,44 @@ _ZIP_ERRORS = (OSError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, NotI
 # ----------------------------------------------------------------------------------------------- .npy / .npz
 
 
-def _header(fp: BinaryIO, available: int, what: str, kinds: str = "iuf") -> tuple[tuple[int, ...], np.dtype]:
-    """Shape and dtype from an .npy header at ``fp``; InputError unless a real array that fits in ``available`` bytes.
+# The header np.save writes (a dict literal padded with spaces), read without ``ast``; anything else goes to
+# numpy's own parser, so what is accepted, and every error message, stays numpy's.
+_NPY_HEADER = re.compile(r"\{'descr': '([<>|=]?[a-zA-Z]\d*)', 'fortran_order': (True|False), "
+                         r"'shape': \(((?:\d+, )*\d+,?)?\), \} *\n")
+_MAX_HEADER = 10_000  # numpy's max_header_size
+
+
+def _parse_header(fp: BinaryIO) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """(shape, fortran order, dtype) of the .npy header at ``fp``, as numpy's ``read_array_header_*`` give."""
+    version = np.lib.format.read_magic(fp)
+    if version == (2, 0):
+        return np.lib.format.read_array_header_2_0(fp)
+    if version != (1, 0):
+        raise ValueError(f"unsupported .npy format version {version}")
+    length = fp.read(2)
+    header = fp.read(int.from_bytes(length, "little")) if len(length) == 2 else b""
+    match = _NPY_HEADER.fullmatch(header.decode("latin1")) if len(header) <= _MAX_HEADER else None
+    if match:
+        descr, fortran, dims = match.groups()
+        try:
+            return tuple(int(d) for d in dims.split(",") if d) if dims else (), fortran == "True", np.dtype(descr)
+        except (TypeError, ValueError):
+            pass
+    return np.lib.format.read_array_header_1_0(io.BytesIO(length + header))  # numpy's verdict on the rest
+
+
+def _header(fp: BinaryIO, available: int, what: str, kinds: str = "iuf") -> tuple[tuple[int, ...], bool, np.dtype]:
+    """Shape, fortran order and dtype from an .npy header at ``fp``; InputError unless a real array that fits in
+    ``available`` bytes.
 
     Args:
-        fp: stream at the start of the .npy data.
+        fp: stream at the start of the .npy data (left at the start of the array's bytes).
         available: bytes of the stream, header included.
         what: how messages name the array.
         kinds: the dtype kinds allowed (numpy's ``dtype.kind`` letters).
     """
     try:
-        version = np.lib.format.read_magic(fp)
-        if version == (1, 0):
-            shape, _, dtype = np.lib.format.read_array_header_1_0(fp)
-        elif version == (2, 0):
-            shape, _, dtype = np.lib.format.read_array_header_2_0(fp)
-        else:
-            raise ValueError(f"unsupported .npy format version {version}")
+        shape, fortran, dtype = _parse_header(fp)
         header_end = fp.tell()
     except (ValueError, TypeError, SyntaxError, RecursionError, MemoryError, *_ZIP_ERRORS) as exc:
         raise InputError(f"{what}: cannot read as a .npy array ({short_error(exc)})") from None
@@ -72,7 +95,7 @@ def _header(fp: BinaryIO, available: int, what: str, kinds: str = "iuf") -> tupl
     if count * dtype.itemsize > available - header_end:
         raise InputError(f"{what}: truncated: shape {shape} needs {count * dtype.itemsize:,} bytes, "
                          f"the file holds {max(available - header_end, 0):,}")
-    return shape, dtype
+    return shape, fortran, dtype
 
 
 def _load_npy(path: Path) -> np.ndarray:
@@ -102,14 +125,25 @@ def _npz_entries(path: Path, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
                     continue
                 info = archive.getinfo(members[key])
                 with archive.open(info) as f:
-                    _header(f, info.file_size, f"{path}: {key}", "US" if key == "layout" else "iuf")
-                with archive.open(info) as f:
-                    out[key] = np.lib.format.read_array(f, allow_pickle=False)
+                    out[key] = _member_array(f, info.file_size, f"{path}: {key}", "US" if key == "layout" else "iuf")
             return out
     except InputError:
         raise
     except (ValueError, *_ZIP_ERRORS) as exc:
         raise InputError(f"{path}: cannot read as a .npz archive ({short_error(exc)})") from None
+
+
+def _member_array(f: BinaryIO, available: int, what: str, kinds: str) -> np.ndarray:
+    """The array of one archive member (read-only), its header checked first: ``np.lib.format.read_array``'s
+    values, without parsing the header twice or reading the data in pieces."""
+    shape, fortran, dtype = _header(f, available, what, kinds)
+    count = math.prod(shape)
+    size = count * dtype.itemsize
+    data = f.read(size)
+    if len(data) != size:
+        raise ValueError(f"EOF: reading array data, expected {size} bytes got {len(data)}")
+    flat = np.frombuffer(data, dtype=dtype, count=count) if size else np.empty(count, dtype=dtype)
+    return flat.reshape(shape[::-1]).T if fortran else flat.reshape(shape)
 
 
 def _numeric(arr: np.ndarray, what: str, ndim: int) -> np.ndarray:

@@ -71,7 +71,9 @@ class Retargeter(RetargeterBase):
         import torch
 
         with torch.inference_mode():
-            x = torch.from_numpy(windows).to(self.device)  # [N, 30, L]
+            # windows arrive as views of time-major memory (retarget.windows); torch gets the contiguous
+            # [N, 30, L] it always had, so its kernels, and their results, are the same
+            x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
             y = self.model.decode(self.model.encode_motion(x), self._code_tensor(body), self._code_tensor(view))
             return y.float().cpu().numpy()
 
@@ -80,13 +82,14 @@ class Retargeter(RetargeterBase):
 
         encode = self.model.encode_body if which == "body" else self.model.encode_view
         with torch.inference_mode():
-            return encode(torch.from_numpy(windows).to(self.device))[:, :, 0].float().cpu().numpy()  # [N, C]
+            x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
+            return encode(x)[:, :, 0].float().cpu().numpy()  # [N, C]
 
     def _input(self, track: PoseTrack, name: str) -> torch.Tensor:
         """[1, 30, T] float32 normalised network input of a real track, on ``device``."""
         import torch
 
-        return torch.from_numpy(self._prepare(track, name)[0])[None].to(self.device)
+        return torch.from_numpy(np.ascontiguousarray(self._prepare(track, name)[0]))[None].to(self.device)
 
     def _code_tensor(self, code: np.ndarray | None) -> torch.Tensor | None:
         import torch

@@ -7,29 +7,33 @@ windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and pl
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pose_io.clean import smooth_joints
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget.network_config import min_frames
 from retarget.preprocess import (
+    LAYOUT,
     NormStats,
     Placement,
-    PreparedTrack,
     PreprocessConfig,
-    body15_track,
     canvas_scale,
     channels_to_joints,
     joints_to_channels,
-    place,
     placement_of,
+    placement_shift,
     prepare,
+    shifted,
+    smooth_frames,
 )
 from retarget.windows import pad_to_multiple, run_windowed
+
+_min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses
 
 
 @dataclass(frozen=True)
@@ -169,7 +173,7 @@ class RetargeterBase:
     @property
     def min_frames(self) -> int:
         """Shortest track (frames) the network takes."""
-        return self.model.min_frames
+        return _min_frames(self.model.config)  # the model's min_frames, worked out once per architecture
 
     def reference_codes(
         self,
@@ -191,14 +195,14 @@ class RetargeterBase:
         Raises:
             InputError: see :meth:`retarget` for the conditions.
         """
-        x, prepared = self._prepare(track, name)  # [30, T]
+        x, scale, body15 = self._prepare(track, name)  # [30, T]
         config = self.model.config
         body = self._static_code(x, "body") if config.body_channels is not None else None
         view_code = None
         if config.view_channels is not None:
             view_code = self._static_code(x if view is None else self._prepare(view, view_name)[0], "view")
-        placement = placement_of(prepared.body15, name)
-        return ReferenceCodes(body, view_code, placement, track.image_size, prepared.scale)
+        placement = placement_of(body15, name)
+        return ReferenceCodes(body, view_code, placement, track.image_size, scale)
 
     def retarget(self, motion: PoseTrack, reference: ReferenceCodes, *, name: str = "motion track") -> PoseTrack:
         """The motion of ``motion`` performed by the reference person, in the reference's pixels.
@@ -254,9 +258,13 @@ class RetargeterBase:
 
     def _finish(self, y: np.ndarray, fps: float, reference: ReferenceCodes, scale: float) -> PoseTrack:
         """[30, T] network output -> body15 track in the reference's pixels."""
-        joints = channels_to_joints(y.astype(np.float64)[None], self.stats)[0] / scale  # [T, 15, 2] reference pixels
-        joints = place(smooth_joints(joints, self.preprocess.output_sigma), reference.placement)
-        return body15_track(joints, fps, reference.image_size)
+        # [T, 15, 2] canvas, worked out in the float64 copy of y (its memory order kept: time-major)
+        joints = channels_to_joints(y.astype(np.float64)[None], self.stats, overwrite=True)[0]
+        joints /= scale  # reference pixels
+        joints = smooth_frames(joints, self.preprocess.output_sigma, overwrite=True)
+        # place(), its float64 sums rounded straight into the float32 joints of the track
+        placed = shifted(joints, placement_shift(joints, reference.placement), np.empty(joints.shape, np.float32))
+        return PoseTrack.complete(placed, fps, reference.image_size, LAYOUT.name, copy=False)  # = body15_track
 
     def _static_code(self, x: np.ndarray, which: str) -> np.ndarray:
         """[30, T] -> [C] mean code over windows of ``code_window`` frames."""
@@ -295,12 +303,15 @@ class RetargeterBase:
                     " they come from a different retargeting model"
                 )
 
-    def _prepare(self, track: PoseTrack, name: str) -> tuple[np.ndarray, PreparedTrack]:
-        """The network input [30, T] float32 of a real track, and the track as prepared for it."""
+    def _prepare(self, track: PoseTrack, name: str) -> tuple[np.ndarray, float, np.ndarray]:
+        """The network input [30, T] float32 of a real track, the scale to the canvas and its body15 joints
+        [T, 15, 2] in its own pixels (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
         if len(track) < self.min_frames:
             raise InputError(
                 f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
             )
         prepared = prepare(track, self.preprocess, name)
-        x = joints_to_channels(prepared.canvas[None], self.stats)[0]  # [30, T] float64
-        return np.ascontiguousarray(x, dtype=np.float32), prepared
+        # [30, T] float64, a view of [T, 30] made in the canvas' memory (nothing else uses it)
+        x = joints_to_channels(prepared.canvas[None], self.stats, overwrite=True)[0]
+        # Kept time-major: windows are cut and run that way (retarget.windows).
+        return np.ascontiguousarray(x.T, dtype=np.float32).T, prepared.scale, prepared.body15

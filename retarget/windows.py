@@ -16,16 +16,18 @@ from dataclasses import dataclass
 import numpy as np
 
 
-def pad_to_multiple(x: np.ndarray, multiple: int) -> tuple[np.ndarray, int]:
-    """Reflect-pad ``[..., T]`` on both ends to a multiple of ``multiple``; returns (padded, left pad).
+def pad_to_multiple(x: np.ndarray, multiple: int, axis: int = -1) -> tuple[np.ndarray, int]:
+    """Reflect-pad the time axis ``axis`` (default the last: ``[..., T]``) on both ends to a multiple of
+    ``multiple``; returns (padded, left pad).
 
     The same frames as ``F.pad(x, (left, right), mode="reflect")``.
     """
-    extra = -x.shape[-1] % multiple
+    extra = -x.shape[axis] % multiple
     left = extra // 2
     if extra == 0:
         return x, 0
-    pads = [(0, 0)] * (x.ndim - 1) + [(left, extra - left)]
+    pads = [(0, 0)] * x.ndim
+    pads[axis] = (left, extra - left)
     return np.pad(x, pads, mode="reflect"), left
 
 
@@ -64,6 +66,10 @@ def run_windowed(
 ) -> list[np.ndarray]:
     """Every input through ``run`` in windows, batched across inputs.
 
+    Windows are cut and outputs summed time-major (``[T, C]`` memory, what :mod:`retarget.numpy_net` works
+    in): ``run`` gets ``[N, C, L]`` views of ``[N, L, C]`` arrays, and the outputs are ``[C', T]`` views of
+    ``[T, C']`` ones when the network gives them so. The numbers do not depend on the memory order.
+
     Args:
         inputs: [C, T_i] float32 arrays (T_i >= the network's shortest input).
         run: the network, [N, C, L] -> [N, C', L] float32 (L a multiple of ``multiple``).
@@ -77,35 +83,36 @@ def run_windowed(
     """
     padded, lefts, pieces = [], [], defaultdict(list)
     for i, x in enumerate(inputs):
-        p, left = pad_to_multiple(x, multiple)  # [C, T8]
+        p, left = pad_to_multiple(x.T, multiple, axis=0)  # [T8, C]
         padded.append(p)
         lefts.append(left)
-        total = p.shape[-1]
+        total = p.shape[0]
         if total <= window:
             pieces[total].append(_Piece(i, 0, total))
         else:
             pieces[window].extend(_Piece(i, s, window) for s in window_starts(total, window, overlap))
-    sums: list[np.ndarray | None] = [None] * len(inputs)  # [C', T8] weighted sums of window outputs
+    sums: list[np.ndarray | None] = [None] * len(inputs)  # [T8, C'] weighted sums of window outputs
     weights: list[np.ndarray | None] = [None] * len(inputs)  # [T8]
     out: list[np.ndarray | None] = [None] * len(inputs)
     for length, group in pieces.items():
         step = max(1, frames_per_call // length)
         for k in range(0, len(group), step):
             chunk = group[k : k + step]
-            y = run(np.stack([padded[p.track][:, p.start : p.start + length] for p in chunk]))  # [N, C', L]
+            windows = np.stack([padded[p.track][p.start : p.start + length] for p in chunk])  # [N, L, C]
+            y = run(windows.transpose(0, 2, 1))  # [N, C', L]
             for piece, yi in zip(chunk, y):
-                i, total = piece.track, padded[piece.track].shape[-1]
+                i, total = piece.track, padded[piece.track].shape[0]
                 if total <= window:  # the whole track in one pass
                     out[i] = yi[:, lefts[i] : lefts[i] + inputs[i].shape[-1]]
                     continue
                 if sums[i] is None:
-                    sums[i] = np.zeros((y.shape[1], total), dtype=np.float32)
+                    sums[i] = np.zeros((total, y.shape[1]), dtype=np.float32)
                     weights[i] = np.zeros(total, dtype=np.float32)
                 w = fade_weights(window, overlap, piece.start == 0, piece.start == total - window)
-                sums[i][:, piece.start : piece.start + length] += yi * w
+                sums[i][piece.start : piece.start + length] += yi.T * w[:, None]
                 weights[i][piece.start : piece.start + length] += w
                 if piece.start == total - window:  # its last window (a track's windows run in order)
-                    out[i] = (sums[i] / weights[i])[:, lefts[i] : lefts[i] + inputs[i].shape[-1]]
+                    sums[i] /= weights[i][:, None]  # in place: the same quotients, no second track-sized array
+                    out[i] = sums[i][lefts[i] : lefts[i] + inputs[i].shape[-1]].T
                     sums[i] = weights[i] = None  # free it now: memory stays bounded by the tracks in flight
     return out  # type: ignore[return-value]
-
