@@ -13,7 +13,9 @@ import typer
 from clone.cli.choices import StageMode
 from clone.cli.common import DEVICE_HELP, console, user_errors
 
-_HEADLINE = ("limb_error_pct", "foot_slide_pct", "jitter_pct", "pose_mse", "pck_0.1", "ssim", "psnr")
+# The primary pose measure first (with ground truth), as on the page; rows a run lacks are left out.
+_HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssim", "psnr_background",
+             "limb_error_pct", "foot_slide_pct", "jitter_pct", "stage_share")
 
 
 @user_errors

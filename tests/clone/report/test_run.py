@@ -69,3 +69,14 @@ def test_cli_report_and_ground_truth_mismatches(tmp_path, tiny_models):
     assert doc["ground_truth"] is None and "ssim" not in doc["methods"]["retarget"]["summary"]
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "a")])
     assert result.exit_code == 2 and "--overwrite" in result.output
+
+    # with ground truth, the printed table leads with the MidHip-aligned pose error, as the page does
+    good = tmp_path / "good"
+    good.mkdir()
+    poses, frames = write_gt(good)
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "b"), "--gt-poses", str(poses), "--gt-frames",
+                                 str(frames)], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    pose_row = result.output.index(metrics.METRICS["pose_rmse_pct"].label)
+    assert pose_row < result.output.index(metrics.METRICS["limb_error_pct"].label)
+    assert metrics.METRICS["psnr_background"].label in result.output
