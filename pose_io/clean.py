@@ -20,6 +20,8 @@ log = logging.getLogger(__name__)
 
 #: Output frames resampled at once (bounds the float64 temporaries of long resamplings).
 _RESAMPLE_CHUNK = 65_536
+#: Frames :func:`smooth_joints` works out at once (a block of body15 frames and its temporaries stay in the cache).
+_SMOOTH_BLOCK = 1024
 
 
 @dataclass(frozen=True)
@@ -194,39 +196,78 @@ def hold_fill(joints: np.ndarray) -> np.ndarray:
     return np.take_along_axis(joints, source[..., None], axis=0)
 
 
-def smooth_joints(joints: np.ndarray, sigma: float) -> np.ndarray:
+def smooth_joints(joints: np.ndarray, sigma: float, *, out: np.ndarray | None = None,
+                  block: int = _SMOOTH_BLOCK) -> np.ndarray:
     """Gaussian filter over time (axis 0) of complete joints, reflecting at the ends (the authors' rule).
 
     Unlike :func:`smooth` (tracks with gaps, confidence-weighted), every value must be present.
+    ``scipy.ndimage.gaussian_filter1d(joints, sigma, axis=0, mode="reflect")`` to the bit (tested), in
+    numpy: importing scipy.ndimage costs ~0.3 s, a third of a short `clone retarget apply`. Same kernel
+    (radius ``int(4 sigma + 0.5)``, normalised), same half-sample reflection, same float64 sums in scipy's
+    order. Worked out ``block`` frames at a time, each read with the frames its kernel reaches on either
+    side where they lie (only the track's two ends are copied, reflected): the filter makes 3 passes per
+    tap over its input, and a block of body15 frames stays in the cache where a long track's passes go to
+    memory.
 
     Args:
         joints: [T, ...] without NaN.
         sigma: standard deviation in frames (0 = a copy).
+        out: [T, ...] array to write the result into (``joints`` itself is allowed: a block is written back
+            once the next one, the last to read its frames, has been smoothed); a new one of ``joints``'
+            dtype when None.
+        block: frames smoothed at once.
+
+    Returns:
+        ``out``, or the new [T, ...] array.
     """
+    data = np.asarray(joints)
+    if out is None:
+        out = np.empty(data.shape, dtype=data.dtype)
+    elif out.shape != data.shape:
+        raise ValueError(f"out has shape {out.shape}, joints {data.shape}")
     if sigma <= 0:
-        return joints.copy()
-    # scipy.ndimage.gaussian_filter1d(joints, sigma, axis=0, mode="reflect") to the bit (tested), in numpy:
-    # importing scipy.ndimage costs ~0.3 s, a third of a short `clone retarget apply`. Same kernel (radius
-    # int(4 sigma + 0.5), normalised), same half-sample reflection, same float64 sums in scipy's order.
+        if out is not data:
+            out[...] = data
+        return out
     radius = int(4.0 * float(sigma) + 0.5)
     taps = np.arange(-radius, radius + 1)
     weights = np.exp(-0.5 / (sigma * sigma) * taps**2)
     weights = (weights / weights.sum())[::-1]
-    data = np.asarray(joints)
     t = data.shape[0]
-    values = data.astype(np.float64)
-    if radius <= t:  # one mirror image at each end (np.pad's symmetric mode, without its overhead)
-        padded = np.concatenate([values[radius - 1 :: -1] if radius else values[:0], values,
-                                 values[: t - radius - 1 : -1] if t > radius else values[::-1]])  # fmt: skip
-    else:
-        padded = np.pad(values, [(radius, radius)] + [(0, 0)] * (data.ndim - 1), mode="symmetric")
-    out = padded[radius : radius + t] * weights[radius]
-    pair = np.empty_like(out)  # reused: fresh temporaries would cost more than the sums
-    for j in range(radius, 0, -1):
-        np.add(padded[radius - j : radius - j + t], padded[radius + j : radius + j + t], out=pair)
-        pair *= weights[radius - j]
-        out += pair
-    return out.astype(data.dtype, copy=False)
+    step = block if radius <= block < t else max(t, 1)  # a kernel wider than a block: the track at once
+    buffers = [np.empty((min(step, t), *data.shape[1:])) for _ in range(2 if t > step else 1)]  # float64
+    pair = np.empty_like(buffers[0])  # reused: fresh temporaries would cost more than the sums
+    pending: tuple[slice, np.ndarray] | None = None  # a smoothed block not written yet
+    for i, start in enumerate(range(0, t, step)):
+        stop = min(start + step, t)
+        n = stop - start
+        padded = _reflected(data, start - radius, stop + radius)  # [n + 2 radius, ...] float64
+        acc = buffers[i % len(buffers)][:n]
+        np.multiply(padded[radius : radius + n], weights[radius], out=acc)
+        tmp = pair[:n]
+        for j in range(radius, 0, -1):
+            np.add(padded[radius - j : radius - j + n], padded[radius + j : radius + j + n], out=tmp)
+            tmp *= weights[radius - j]
+            acc += tmp
+        if pending is not None:
+            out[pending[0]] = pending[1]
+        pending = (slice(start, stop), acc)
+    if pending is not None:
+        out[pending[0]] = pending[1]
+    return out
+
+
+def _reflected(data: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Frames ``lo:hi`` of [T, ...] ``data`` as float64, mirrored at its ends (half-sample, as often as needed:
+    scipy's "reflect", np.pad's "symmetric"); a view of ``data`` where it needs no mirror and is float64."""
+    t = data.shape[0]
+    if 0 <= lo and hi <= t:
+        return data[lo:hi].astype(np.float64, copy=False)
+    if -t <= lo and hi <= 2 * t:  # at most one mirror image at each end
+        parts = [data[: max(-lo, 0)][::-1], data[max(lo, 0) : min(hi, t)], data[::-1][: max(hi - t, 0)]]
+        return np.concatenate(parts).astype(np.float64, copy=False)
+    frames = np.arange(lo, hi) % (2 * t)  # the mirrored track repeats every 2T frames
+    return data.take(np.where(frames < t, frames, 2 * t - 1 - frames), axis=0).astype(np.float64, copy=False)
 
 
 def interpolate_missing(values: np.ndarray) -> np.ndarray:

@@ -449,44 +449,9 @@ def prepare(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> 
     body64 = body.astype(np.float64)  # converted once, for the filling and the skeleton height
     filled = _filled(body64, name)
     scale = _scale(track.image_size, config, body64, name)
-    canvas = smooth_frames(filled, config.input_sigma, overwrite=True)  # filled is ours (body64 or a new array)
+    canvas = smooth_joints(filled, config.input_sigma, out=filled)  # filled is ours (body64 or a new array)
     canvas *= scale
     return PreparedTrack(canvas, scale, body)
-
-
-def smooth_frames(joints: np.ndarray, sigma: float, block: int = 1024, overwrite: bool = False) -> np.ndarray:
-    """:func:`pose_io.clean.smooth_joints` of [T, ...] frames, worked out ``block`` frames at a time.
-
-    The same numbers (tested): a block is smoothed together with the frames its kernel reaches on either
-    side (``int(4 sigma + 0.5)``, scipy's radius, which smooth_joints keeps) and only its own frames are
-    kept; the track's real ends are reflected as before. The filter makes 3 passes per kernel tap over its
-    input; a block of 1,024 body15 frames stays in the cache where a long track's passes go to memory. On
-    10,000 frames (CPU time, shared 2-core machine): 5.5 ms at once, 3.7 in blocks, 1.9 in blocks in place.
-
-    Args:
-        joints: [T, ...] frames without NaN.
-        sigma: standard deviation in frames (0 = a copy).
-        block: frames smoothed at once.
-        overwrite: write the result into ``joints`` (a writable array of the caller's; nothing else of a
-            long track is allocated). A block is written back once the next one, the last to read its
-            frames, has been smoothed.
-    """
-    reach = int(4.0 * float(sigma) + 0.5) if sigma > 0 else 0
-    t = len(joints)
-    if t <= block + 2 * reach:
-        return smooth_joints(joints, sigma)
-    overwrite = overwrite and reach <= block and joints.flags.writeable
-    out = joints if overwrite else np.empty(joints.shape, dtype=np.asarray(joints).dtype)
-    pending: tuple[slice, np.ndarray] | None = None  # a smoothed block not written yet
-    for start in range(0, t, block):
-        stop = min(start + block, t)
-        lo, hi = max(0, start - reach), min(t, stop + reach)
-        smoothed = smooth_joints(joints[lo:hi], sigma)[start - lo : stop - lo]
-        if pending is not None:
-            out[pending[0]] = pending[1]
-        pending = (slice(start, stop), smoothed)
-    out[pending[0]] = pending[1]  # type: ignore[index]
-    return out
 
 
 def prepare_track(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> np.ndarray:

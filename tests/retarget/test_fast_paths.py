@@ -1,8 +1,8 @@
 """The fast numpy paths of retargeting's preparation give the numbers of the plain formulas, bit for bit.
 
 Each reference below is the formulation the code had before it was made faster (time-major arrays, fancy
-indexing, broadcasting along the 2-long coordinate axis, one pass of the smoothing filter over the whole
-track, channel-major windows); the new code must agree with them exactly, not just closely.
+indexing, broadcasting along the 2-long coordinate axis, channel-major windows; the smoothing filter in
+blocks: tests/pose_io/test_clean_smooth_parity.py); the new code must agree with them exactly, not just closely.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from pose_io.clean import smooth_joints
 from retarget.preprocess import (
     LAYOUT,
     LOCAL_INDEX,
@@ -26,7 +25,6 @@ from retarget.preprocess import (
     joints_to_channels,
     place,
     row_statistics,
-    smooth_frames,
 )
 from retarget.windows import fade_weights, run_windowed, window_starts
 
@@ -112,19 +110,6 @@ def test_place_is_joints_plus_the_shift(dtype):
     assert _same(place(joints, target), expected)
 
 
-@pytest.mark.parametrize("sigma", [0.0, 0.5, 1.0, 2.0, 2.4, 3.7, 40.0, 300.0])
-@pytest.mark.parametrize("frames", [1, 5, 60, 1000, 2500])
-def test_smoothing_in_blocks_is_smoothing_the_whole_track(sigma, frames):
-    rng = np.random.default_rng(frames)
-    joints = _joints(rng, (frames,))
-    expected = smooth_joints(joints, sigma)
-    for block in (7, 64, 1024):
-        assert _same(smooth_frames(joints, sigma, block), expected)
-        mine = joints.copy()
-        assert _same(smooth_frames(mine, sigma, block, overwrite=True), expected)  # written back a block late
-    assert _same(smooth_frames(joints.astype(np.float32), sigma, 64), smooth_joints(joints.astype(np.float32), sigma))
-
-
 def _reference_windowed(inputs, run, multiple, window, overlap, frames_per_call):
     """run_windowed as it was: channel-major windows and sums."""
     padded, lefts, pieces = [], [], defaultdict(list)
@@ -191,3 +176,26 @@ def test_channels_of_strided_and_integer_joints_take_the_plain_path_alike():
     root_x, ground_y = _stand(strided[0])
     shift = np.array([target.root_x - root_x, target.ground_y - ground_y])
     assert _same(place(strided[0], target), strided[0] + shift)
+
+
+def test_finished_tracks_are_the_plain_formula_and_share_no_memory():
+    """retarget_many's tracks (their joints written where the network output of each lay) are the plain
+    formula of the output, bit for bit, each in memory of its own; long tracks cross several windows."""
+    from pose_io.clean import smooth_joints as smooth
+    from retarget.api import InferenceConfig, load_retargeter
+    from tests.figures import tall_and_small, walking_figure
+
+    retargeter = load_retargeter(config=InferenceConfig(window=128, overlap=32, batch=2), backend="numpy")
+    reference = retargeter.reference_codes(tall_and_small(96)["small"])
+    drivers = [walking_figure(n, seed=n) for n in (40, 96, 96, 300, 17)]
+    outputs = []
+    original = retargeter._finish
+    retargeter._finish = lambda y, *args: outputs.append(y.copy()) or original(y, *args)  # type: ignore[method-assign]
+    many = retargeter.retarget_many(drivers, reference)
+    scale = retargeter._reference_scale(reference)
+    for y, moved in zip(outputs, many):
+        canvas = _reference_to_joints(y[None].astype(np.float64), retargeter.stats)[0]
+        expected = place(smooth(canvas / scale, retargeter.preprocess.output_sigma), reference.placement)
+        assert _same(moved.joints, expected.astype(np.float32))
+    for i, a in enumerate(many):
+        assert not any(np.shares_memory(a.joints, b.joints) for b in many[i + 1 :])
