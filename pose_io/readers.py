@@ -87,6 +87,8 @@ SIDECAR_KIND = "clone2d-openpose-folder"
 _SIZE_STEP = 16
 
 _KEYPOINTS_RE = re.compile(r"(\d+)_keypoints\.json$")
+#: Pose files a folder of tracks may hold (an OpenPose folder is one track too).
+TRACK_SUFFIXES = (".npz", ".npy", ".csv", ".json")
 
 __all__ = [
     "LAYOUT_BY_JOINTS", "READERS", "SIDECAR_KIND", "SIDECAR_NAME", "TrackSummary", "detect_format",
@@ -96,6 +98,11 @@ __all__ = [
 
 
 # ----------------------------------------------------------------------------------------------- entry points
+
+
+def is_openpose_folder(path: Path) -> bool:
+    """A folder holding ``*_keypoints.json`` frames: one track."""
+    return path.is_dir() and any(path.glob("*_keypoints.json"))
 
 
 def read_track(

@@ -17,20 +17,12 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from pose_io.errors import InputError
+from pose_io.readers import TRACK_SUFFIXES, is_openpose_folder
 from pose_io.track import PoseTrack
 from pose_io.writers import write_track
 from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
 
 log = logging.getLogger(__name__)
-
-#: Pose files a folder of clips may hold (OpenPose folders are clips too).
-TRACK_SUFFIXES = (".npz", ".npy", ".csv", ".json")
-
-
-def is_openpose_folder(path: Path) -> bool:
-    """A folder holding ``*_keypoints.json`` frames: one track."""
-    return path.is_dir() and any(path.glob("*_keypoints.json"))
-
 
 def is_batch(inputs: Sequence[Path]) -> bool:
     """Whether the inputs name several clips: more than one path, or a folder that is not one OpenPose track."""

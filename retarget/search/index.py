@@ -31,6 +31,7 @@ import torch
 
 from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
+from pose_io.readers import TRACK_SUFFIXES, is_openpose_folder
 from pose_io.track import PoseTrack
 from retarget.search.features import TrackEncoder, track_features
 
@@ -38,8 +39,6 @@ log = logging.getLogger(__name__)
 
 FORMAT = "clone2d-search-index"
 FORMAT_VERSION = 1
-# Files a folder walk takes as tracks (an OpenPose folder, recognised by its frames, is one track).
-TRACK_SUFFIXES = (".npz", ".npy", ".csv", ".json")
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,23 +162,19 @@ def find_tracks(inputs: Iterable[str | os.PathLike]) -> list[tuple[Path, bool]]:
     for item in map(Path, inputs):
         if not item.exists():
             raise InputError(f"{item}: no such file or folder")
-        if item.is_file() or _is_openpose_folder(item):
+        if item.is_file() or is_openpose_folder(item):
             add(item, True)
             continue
         for root, dirs, files in os.walk(item):
             here = Path(root)
             dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-            for d in [d for d in dirs if _is_openpose_folder(here / d)]:
+            for d in [d for d in dirs if is_openpose_folder(here / d)]:
                 dirs.remove(d)  # an OpenPose folder is one track: its frames are not walked
                 add(here / d, False)
             for f in sorted(files):
                 if f.lower().endswith(TRACK_SUFFIXES) and not f.startswith("."):
                     add(here / f, False)
     return list(out.values())
-
-
-def _is_openpose_folder(path: Path) -> bool:
-    return path.is_dir() and any(path.glob("*_keypoints.json"))
 
 
 def build_index(
