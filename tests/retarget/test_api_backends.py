@@ -7,7 +7,6 @@ import sys
 
 import numpy as np
 import pytest
-import torch
 
 from pose_io.errors import InputError
 from retarget.api import InferenceConfig, NumpyRetargeter, Retargeter, load_retargeter
@@ -16,17 +15,7 @@ from tests.figures import tall_and_small, walking_figure
 PX = 2e-3  # pixels; measured ~1e-4 (float32 rounding of 500-pixel coordinates)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _one_thread():
-    from retarget.blas import blas_threads, set_blas_threads
-
-    threads, blas = torch.get_num_threads(), blas_threads()
-    torch.set_num_threads(1)
-    set_blas_threads(1)
-    yield
-    torch.set_num_threads(threads)
-    if blas is not None:
-        set_blas_threads(blas)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 @pytest.fixture(scope="module")

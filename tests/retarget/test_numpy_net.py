@@ -16,18 +16,7 @@ from retarget.numpy_net import NumpyRetargetNet
 TOL = 1e-4  # network units (normalised channels); measured ~3e-6
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """Tiny products: one thread is faster, and much faster on a machine whose other core is busy."""
-    from retarget.blas import blas_threads, set_blas_threads
-
-    threads, blas = torch.get_num_threads(), blas_threads()
-    torch.set_num_threads(1)
-    set_blas_threads(1)
-    yield
-    torch.set_num_threads(threads)
-    if blas is not None:
-        set_blas_threads(blas)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 def _pair(variant: str, seed: int = 0) -> tuple[RetargetNet, NumpyRetargetNet]:
