@@ -138,9 +138,8 @@ class FrameScorer:
         summary = {n: nan_mean(v) for n, v in per_frame.items()}
         if self._background:
             sse, count = np.array(self._background, dtype=np.float64).T  # [F] each
-            with np.errstate(divide="ignore"):
-                per_frame["psnr_background"] = _psnr(sse / np.maximum(count, 1))
-                summary["psnr_background"] = float(_psnr(np.array(sse.sum() / max(count.sum(), 1))))
+            per_frame["psnr_background"] = _psnr(sse / np.maximum(count, 1))
+            summary["psnr_background"] = float(_psnr(np.array(sse.sum() / max(count.sum(), 1))))
         return Scores(per_frame, summary)
 
 
