@@ -700,7 +700,7 @@ def _resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
     loaded = load_checkpoint(out)
     if loaded.training is None:
         raise InputError(f"{out}: holds no training state to resume (only weights)")
-    stored = loaded.training["config"]
+    stored = TrainConfig.from_dict(loaded.training["config"]).to_dict()  # settings added since: their defaults
     mine = config.to_dict()
     changed = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
     if changed:

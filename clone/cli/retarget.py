@@ -202,6 +202,10 @@ def train(
     spread_weight: Annotated[
         float, typer.Option("--spread-weight", min=0.0, help="Weight of the range-of-motion loss (0 = the paper).")
     ] = 0.5,
+    code_weight: Annotated[
+        float, typer.Option("--code-weight", min=0.0, help="Weight of the static-code spread: skeleton and view codes "
+                            "the same for every window of one skeleton / view (0 = the paper).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -242,6 +246,7 @@ def train(
         loss = dataclasses.replace(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
+            code_weight=code_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size)
     except ValueError as exc:

@@ -165,6 +165,20 @@ def test_fit_refuses_to_overwrite_or_to_resume_other_settings(tmp_path):
         fit(split, None, tmp_path / "none.pt", TINY, epochs=1, resume=True)
 
 
+def test_resume_fills_settings_added_since_with_their_defaults(tmp_path):
+    import dataclasses
+
+    split = FakeSplit()
+    fit(split, None, tmp_path / "r.pt", TINY, epochs=1)
+    state = torch.load(tmp_path / "r.pt", weights_only=False)
+    del state["training"]["config"]["loss"]["code_weight"]  # as written before the setting existed
+    torch.save(state, tmp_path / "r.pt")
+    assert fit(split, None, tmp_path / "r.pt", TINY, epochs=2, resume=True).epochs == 2
+    other = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, code_weight=1.0))
+    with pytest.raises(InputError, match="other settings.*loss"):
+        fit(split, None, tmp_path / "r.pt", other, epochs=3, resume=True)
+
+
 def test_real_tracks_join_with_self_reconstruction(tmp_path, walking_track):
     t = np.arange(80)[:, None]
     joints = np.concatenate([walking_track.joints, walking_track.joints[::-1]])  # 80 frames
