@@ -111,6 +111,8 @@ class TrainConfig:
     loss: LossConfig = field(default_factory=LossConfig)
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
     body_normalise: bool = True
+    extra_characters: int = 0
+    extra_spread: float = 1.0
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -794,7 +796,8 @@ def train(
     start = load_weights(init) if init is not None and not resume else None
     real = read_real_tracks(real_dir) if real_dir is not None else []
     with distributed.main_first():
-        world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed)
+        world = MotionWorld.build(mocap_dir, cache_dir, seed=config.seed, extra_train_characters=config.extra_characters,
+                                  extra_spread=config.extra_spread)  # fmt: skip
     return fit(
         world.split("train"), world.split("val"), out, config, device, real, epochs, minutes, resume,
         num_workers=num_workers, progress=progress, init=start, amp=amp,

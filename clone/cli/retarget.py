@@ -27,6 +27,7 @@ MAX_EPOCHS = 1_000_000
 MAX_BATCH = 65_536
 MAX_WORKERS = 256
 MAX_THREADS = 1024
+MAX_EXTRA_CHARACTERS = 4096  # 11 MB of world cache each
 MAX_PAIRS = 1_000_000
 MAX_LENGTH = 100_000
 
@@ -206,6 +207,14 @@ def train(
         float, typer.Option("--code-weight", min=0.0, help="Weight of the static-code spread: skeleton and view codes "
                             "the same for every window of one skeleton / view (0 = the paper).")
     ] = 0.0,
+    extra_characters: Annotated[
+        int, typer.Option("--extra-characters", min=0, help="Training characters added to the world's 64 (their "
+                          "own random draws; validation and test characters unchanged).")
+    ] = 0,
+    extra_spread: Annotated[
+        float, typer.Option("--extra-spread", min=0.1, max=4.0, help="Factor on the body-proportion spread of the "
+                            "extra characters (1: like the world's).")
+    ] = 1.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -240,6 +249,8 @@ def train(
     check_number("--batch-size", batch_size, 1, MAX_BATCH)
     check_number("--workers", workers, 0, MAX_WORKERS)
     check_number("--threads", threads, 1, MAX_THREADS)
+    check_number("--extra-characters", extra_characters, 0, MAX_EXTRA_CHARACTERS)
+    check_number("--extra-spread", extra_spread, 0.1, 4.0)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -248,7 +259,8 @@ def train(
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
             code_weight=code_weight,
         )
-        config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size)
+        config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
+                             extra_characters=extra_characters, extra_spread=extra_spread)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)
@@ -325,6 +337,8 @@ def evaluate(
     check_number("--pairs", pairs, 1, MAX_PAIRS)
     check_number("--length", length, 16, MAX_LENGTH)
     check_number("--threads", threads, 1, MAX_THREADS)
+    check_number("--extra-characters", extra_characters, 0, MAX_EXTRA_CHARACTERS)
+    check_number("--extra-spread", extra_spread, 0.1, 4.0)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     named: dict[str, Path] = {}

@@ -19,6 +19,7 @@ import hashlib
 import json
 import logging
 import re
+import shutil
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -78,6 +79,9 @@ class WorldConfig:
             also gets every ``NAMED_CHARACTERS`` entry).
         val_fraction, test_fraction: share of each source's frames held out (whole motions).
         canvas_size: (width, height) of the 2D views (framing rule of ``camera.frame_camera``).
+        extra_train_characters: training characters beyond the sampled ones, drawn from a random stream of
+            their own (val and test characters stay those of a world without them).
+        extra_spread: factor on the proportion spread of the extra characters (``sample_skeleton``).
     """
 
     seed: int = 0
@@ -90,6 +94,8 @@ class WorldConfig:
     val_fraction: float = 0.1
     test_fraction: float = 0.1
     canvas_size: tuple[int, int] = CANVAS_SIZE
+    extra_train_characters: int = 0
+    extra_spread: float = 1.0
 
     def __post_init__(self) -> None:
         if self.window < 2 or self.stride < 1:
@@ -100,6 +106,8 @@ class WorldConfig:
             raise InputError("every split needs at least one character")
         if not (0 <= self.val_fraction < 0.5 and 0 <= self.test_fraction < 0.5):
             raise InputError("val_fraction and test_fraction must be in [0, 0.5)")
+        if self.extra_train_characters < 0 or not 0 < self.extra_spread <= 4:
+            raise InputError("extra_train_characters must be >= 0 and extra_spread in (0, 4]")
 
 
 class WindowLabel(NamedTuple):
@@ -137,7 +145,10 @@ def find_mocap_files(mocap_dir: Path) -> list[Path]:
 
 
 def _cache_key(cfg: WorldConfig, files: list[tuple[str, int]]) -> str:
-    blob = json.dumps({"version": WORLD_VERSION, "config": asdict(cfg), "files": files}, sort_keys=True)
+    config = asdict(cfg)
+    if not cfg.extra_train_characters:  # settings added later enter the key only when used: old caches stay valid
+        del config["extra_train_characters"], config["extra_spread"]
+    blob = json.dumps({"version": WORLD_VERSION, "config": config, "files": files}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
@@ -186,6 +197,11 @@ def make_characters(cfg: WorldConfig) -> dict[str, list[Skeleton]]:
             Skeleton(sample_skeleton(rng).lengths, name=f"{split}_{k:03d}") for k in range(counts[split])
         ]
     out["test"] += list(NAMED_CHARACTERS.values())
+    extra = np.random.default_rng([cfg.seed, 3])
+    out["train"] += [
+        Skeleton(sample_skeleton(extra, cfg.extra_spread).lengths, name=f"train_extra_{k:03d}")
+        for k in range(cfg.extra_train_characters)
+    ]
     return out
 
 
@@ -425,6 +441,8 @@ class MotionWorld:
         val_fraction: float = 0.1,
         test_fraction: float = 0.1,
         canvas_size: tuple[int, int] = CANVAS_SIZE,
+        extra_train_characters: int = 0,
+        extra_spread: float = 1.0,
         rebuild: bool = False,
         progress: Callable[[int, int, str], None] | None = None,
     ) -> MotionWorld:
@@ -433,8 +451,8 @@ class MotionWorld:
         Args:
             mocap_dir: folder searched recursively for ``.bvh``, ``.bvh.gz`` and ``.amc`` (with ASF).
             cache_dir: where worlds are cached (default ``default_cache_dir()``).
-            seed, fps, n_*_characters, window, stride, val_fraction, test_fraction, canvas_size: see
-                ``WorldConfig``.
+            seed, fps, n_*_characters, window, stride, val_fraction, test_fraction, canvas_size,
+                extra_train_characters, extra_spread: see ``WorldConfig``.
             rebuild: build again even when the cache has this world.
             progress: called as ``progress(done, total, what)`` while files load.
 
@@ -448,6 +466,7 @@ class MotionWorld:
             seed=seed, fps=float(fps), window=window, stride=stride, n_train_characters=n_train_characters,
             n_val_characters=n_val_characters, n_test_characters=n_test_characters, val_fraction=val_fraction,
             test_fraction=test_fraction, canvas_size=(int(canvas_size[0]), int(canvas_size[1])),
+            extra_train_characters=extra_train_characters, extra_spread=float(extra_spread),
         )
         mocap_dir = Path(mocap_dir)
         if not mocap_dir.is_dir():
@@ -495,6 +514,17 @@ class MotionWorld:
         return out
 
 
+def _check_space(out: Path, characters: dict[str, list[Skeleton]], split_of: Sequence[str], frames: list[int]) -> None:
+    """Refuse before allocating when the disk cannot hold the positions (characters + source, per split)."""
+    need = sum(
+        (len(characters[split]) + 1) * sum(f for f, s in zip(frames, split_of) if s == split) * len(WORLD_JOINTS) * 12
+        for split in SPLITS
+    )
+    free = shutil.disk_usage(out).free
+    if need * 1.1 + 2**27 > free:
+        raise InputError(f"{out}: the motion world needs {need / 2**30:.1f} GB, {free / 2**30:.1f} GB are free")
+
+
 def _write_world(
     out: Path,
     mocap_dir: Path,
@@ -536,6 +566,7 @@ def _write_world(
                 f"{mocap_dir}: too few distinct motions for train/val/test ({len(set(groups))} motion groups)"
             )
     characters = make_characters(cfg)
+    _check_space(out, characters, split_of, frames)
 
     summary: dict = {
         "version": WORLD_VERSION,

@@ -235,7 +235,7 @@ _CHILD_SHARE = 0.25
 _ADULT_MIN = 1.50
 
 
-def sample_skeleton(rng: np.random.Generator) -> Skeleton:
+def sample_skeleton(rng: np.random.Generator, spread: float = 1.0) -> Skeleton:
     """A random human character.
 
     The height is uniform in 1.10-1.50 m (a quarter of the draws: children and teenagers) or in
@@ -244,12 +244,13 @@ def sample_skeleton(rng: np.random.Generator) -> Skeleton:
 
     Args:
         rng: the random generator (the only source of randomness).
+        spread: factor on every proportion's log-normal sigma (1: the world's test characters).
     """
     if rng.random() < _CHILD_SHARE:
         height = rng.uniform(MIN_HEIGHT, _ADULT_MIN)
     else:
         height = rng.uniform(_ADULT_MIN, MAX_HEIGHT)
-    factors = {k: float(np.exp(np.clip(rng.normal(), -2.5, 2.5) * s)) for k, s in _SPREAD.items()}
+    factors = {k: float(np.exp(np.clip(rng.normal(), -2.5, 2.5) * s * spread)) for k, s in _SPREAD.items()}
     return make_skeleton(height, **factors)
 
 

@@ -135,6 +135,32 @@ def test_second_build_comes_from_the_cache(
         MotionWorld.build(tiny_mocap, tiny_world.path.parent, **dict(SMALL, seed=1))
 
 
+def test_extra_characters_join_training_only(tiny_mocap: Path, tiny_world: MotionWorld) -> None:
+    wide = MotionWorld.build(tiny_mocap, tiny_world.path.parent, **SMALL, extra_train_characters=4, extra_spread=3.0)
+    assert wide.path != tiny_world.path
+    train, base = wide.split("train"), tiny_world.split("train")
+    assert train.num_characters == 3 + 4 and train.characters[:3] == base.characters
+    assert all(name.startswith("train_extra_") for name in train.character_names[3:])
+    for name in ("val", "test"):  # what the network is measured on does not move
+        assert wide.split(name).characters == tiny_world.split(name).characters
+        np.testing.assert_array_equal(wide.split(name).window(0, 1, 2), tiny_world.split(name).window(0, 1, 2))
+
+    def spread(skeletons: tuple) -> float:
+        lengths = np.array([s.lengths for s in skeletons]) / np.array([[s.height] for s in skeletons])
+        return float(np.log(lengths).std(axis=0).mean())
+
+    assert spread(train.characters[3:]) > spread(train.characters[:3])
+
+
+def test_world_build_refuses_what_the_disk_cannot_hold(
+    tiny_mocap: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(dataset_module.shutil, "disk_usage", lambda path: type("U", (), {"free": 2**20})())
+    with pytest.raises(InputError, match="needs .* GB"):
+        MotionWorld.build(tiny_mocap, tmp_path / "cache", **SMALL)
+    assert not any((tmp_path / "cache").glob("world-*"))
+
+
 def test_build_errors(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="no such folder"):
         MotionWorld.build(tmp_path / "none", tmp_path / "cache")
