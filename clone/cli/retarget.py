@@ -337,8 +337,6 @@ def evaluate(
     check_number("--pairs", pairs, 1, MAX_PAIRS)
     check_number("--length", length, 16, MAX_LENGTH)
     check_number("--threads", threads, 1, MAX_THREADS)
-    check_number("--extra-characters", extra_characters, 0, MAX_EXTRA_CHARACTERS)
-    check_number("--extra-spread", extra_spread, 0.1, 4.0)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     named: dict[str, Path] = {}
