@@ -10,7 +10,7 @@ STAMP := $(VENV)/.clone2d-installed
 # error line about exactly those skipped pins on every fresh install).
 $(STAMP): pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
-	$(PY) -m pip install -q --disable-pip-version-check -e ".[dev]"
+	$(PY) -m pip install -q --disable-pip-version-check -e ".[dev,fast]"
 	$(PY) -m pip install -q --disable-pip-version-check absl-py attrs flatbuffers "protobuf<5"
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-warn-conflicts mediapipe==0.10.14
 	touch $(STAMP)

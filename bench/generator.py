@@ -9,9 +9,11 @@ Baseline: eager fp32 with autograd on (eval mode). Options: ``inference_mode`` (
 today), ``channels_last`` (+ inference mode), ``bf16_autocast`` (CPU autocast + inference mode),
 ``jit_trace_freeze`` (``torch.jit.freeze(torch.jit.trace(...))`` under no_grad), ``compile``
 (``torch.compile`` default mode, inference mode; its compile time is recorded), ``onnxruntime`` (the
-generator exported to ONNX and run by ONNX Runtime, what ``clone drive`` uses on a CPU when the ``fast`` extra
-is installed; the export is ``prepare_s``). ``max_abs_diff`` is each
-option's largest output difference from fp32 eager on the same input (outputs are in [-1, 1]).
+generator exported to ONNX and run by ONNX Runtime in fp32; the export is ``prepare_s``), ``int8`` (the same
+export statically quantised by :mod:`clone.int8_generator`, what ``clone drive`` uses on a CPU when the ``fast``
+extra is installed; calibrated here on 8 random inputs, as the network is untrained; export + quantisation is
+``prepare_s``). ``max_abs_diff`` / ``mean_abs_diff`` are each option's largest / mean output difference from
+fp32 eager on the same input (outputs are in [-1, 1]).
 """
 
 from __future__ import annotations
@@ -23,7 +25,8 @@ import time
 from typing import Any
 
 OPTIONS = ("eager_grad", "inference_mode", "channels_last", "bf16_autocast", "jit_trace_freeze", "compile",
-           "onnxruntime")
+           "onnxruntime", "int8")
+ONNX_OPTIONS = ("onnxruntime", "int8")  # need the `fast` extra
 BASELINE = "eager_grad"
 
 
@@ -76,6 +79,18 @@ def _runner(option: str, net: Any, x: Any, plate: Any = None) -> tuple[Any, floa
 
         def call() -> Any:
             return session(x, plate)
+    elif option == "int8":
+        from clone.int8_generator import QuantConfig, quantize
+        from clone.onnx_generator import OnnxGenerator, export_onnx
+
+        generator = torch.Generator().manual_seed(1)
+        feeds = [{"x": (torch.rand(x.shape, generator=generator) * 2 - 1).numpy(),
+                  **({"plate": plate.numpy()} if plate is not None else {})} for _ in range(8)]
+        model = quantize(export_onnx(net, x.shape[-1], plate is not None), feeds, QuantConfig())
+        session = OnnxGenerator.from_onnx(model, plate is not None, torch.get_num_threads(), "int8")
+
+        def call() -> Any:
+            return session(x, plate)
     else:
         raise ValueError(f"unknown option {option!r}; valid: {', '.join(OPTIONS)}")
     return call, time.perf_counter() - t0
@@ -107,9 +122,10 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     with torch.no_grad():
         ref = UNetGenerator(config).eval()
         ref.load_state_dict({k: v.contiguous() for k, v in net.state_dict().items()})
-        diff = float((call().float().contiguous() - ref(x, plate)).abs().max())
+        diff = (call().float().contiguous() - ref(x, plate)).abs()  # [1, 3, S, S]
     return {"fps": timing.rate(1), "median_s": timing.median_s, "peak_rss_mb": peak, "rss_before_mb": rss_before,
-            "rss_delta_mb": peak - rss_before, "prepare_s": prepare_s, "max_abs_diff": diff,
+            "rss_delta_mb": peak - rss_before, "prepare_s": prepare_s, "max_abs_diff": float(diff.max()),
+            "mean_abs_diff": float(diff.mean()),
             "generator": config.to_dict()}
 
 
@@ -134,8 +150,8 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
     rows, notes = [], []
     options = [o for o in OPTIONS if not (quick and o == "compile")]
     if not onnx_available():
-        options.remove("onnxruntime")
-        notes.append("onnxruntime not measured: the optional extra `fast` is not installed")
+        options = [o for o in options if o not in ONNX_OPTIONS]
+        notes.append("onnxruntime and int8 not measured: the optional extra `fast` is not installed")
     slow_bf16: dict[int, float] = {}  # threads -> bf16 speed-up at 128²
     for size in sizes:
         for threads in threads_list:
@@ -163,14 +179,17 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
                     slow_bf16[threads] = r["fps"] / base["fps"]
                 rows.append(row(case, option, r["fps"], "frames/s", base["fps"], "eager fp32, autograd on",
                                 peak_rss_mb=round(r["peak_rss_mb"], 1), rss_delta_mb=round(r["rss_delta_mb"], 1),
-                                max_abs_diff=r["max_abs_diff"], prepare_s=round(r["prepare_s"], 2)))
+                                max_abs_diff=r["max_abs_diff"], mean_abs_diff=float(f"{r['mean_abs_diff']:.3g}"),
+                                prepare_s=round(r["prepare_s"], 2)))
     if quick:
         notes.append("--quick: 1 thread only, compile skipped")
     notes.append("peak RSS per configuration from a fresh subprocess (VmHWM); rss_delta = peak - RSS after "
                  "importing torch and building model + input")
-    notes.append("clone/drive.py runs the generator on ONNX Runtime when the `fast` extra is installed (the onnxruntime "
-                 "row), else under torch.inference_mode (the inference_mode row); an option is worth switching to at "
-                 "> 1.3x that row with max_abs_diff < 1e-2")
+    notes.append("clone/drive.py runs the generator on ONNX Runtime in int8 when the `fast` extra is installed (the "
+                 "int8 row; `--runtime onnx`: the onnxruntime row), else under torch.inference_mode (the "
+                 "inference_mode row); an fp32 option is worth switching to at > 1.3x that row with max_abs_diff < "
+                 "1e-2; int8's differences here come from an untrained network calibrated on random inputs: its "
+                 "quality cost on a trained model is measured as SSIM against ground truth (README)")
     return {"rows": rows, "notes": notes}
 
 

@@ -197,13 +197,14 @@ def draw_pose_maps(model: ReferenceModel, track: PoseTrack, chunk: int = 16) -> 
 
 
 def build_drive_generator(model: ReferenceModel, device: torch.device, runtime: str = "auto") -> Callable[..., Tensor]:
-    """The model's generator, ready to drive: the torch module, or its ONNX Runtime export.
+    """The model's generator, ready to drive: the torch module, or its ONNX Runtime export in fp32 or int8.
 
     Args:
         model: the reference model.
         device: where the generator runs.
-        runtime: ``auto`` (ONNX Runtime on a CPU when the ``fast`` extra is installed), ``torch`` or ``onnx``
-            (see :func:`clone.onnx_generator.generator_runtime`).
+        runtime: ``auto`` (int8 ONNX Runtime on a CPU when the ``fast`` extra is installed, else torch),
+            ``torch``, ``onnx`` or ``int8`` (see :func:`clone.onnx_generator.generator_runtime`); ``int8`` falls
+            back to ``onnx`` with a warning when quantising fails (:mod:`clone.int8_generator`).
 
     Returns:
         ``net(x, plate) -> frame`` on [B, C_in, S, S] / [1, 3, S, S] tensors on ``device``.
@@ -214,6 +215,11 @@ def build_drive_generator(model: ReferenceModel, device: torch.device, runtime: 
         runtime = generator_runtime(runtime, device)
     except ValueError as err:
         raise InputError(str(err)) from None
+    if runtime == "int8":
+        from clone.int8_generator import build_int8_generator
+
+        log.info("running the generator on ONNX Runtime in int8")
+        return build_int8_generator(model)
     net = model.build_generator(device)
     if runtime == "torch":
         return net
@@ -237,7 +243,7 @@ def generate_frames(
         track: body15 poses in the reference's image pixels.
         device: where the generator runs.
         chunk: frames per batch of pose maps.
-        runtime: ``auto``, ``torch`` or ``onnx`` (see :func:`build_drive_generator`).
+        runtime: ``auto``, ``torch``, ``onnx`` or ``int8`` (see :func:`build_drive_generator`).
 
     Yields:
         ``(pose map, frame)`` per track frame, both [S, S, 3] uint8 RGB.
@@ -320,8 +326,8 @@ def drive(
         overwrite: replace existing outputs.
         max_gap: fill gaps of at most this many frames in the driver (0: none).
         progress: called with (frames done, total) after every frame.
-        runtime: the generator's runtime: ``auto`` (ONNX Runtime on a CPU when the ``fast`` extra is
-            installed, else torch), ``torch`` or ``onnx``.
+        runtime: the generator's runtime: ``auto`` (int8 ONNX Runtime on a CPU when the ``fast`` extra is
+            installed, else torch), ``torch``, ``onnx`` or ``int8`` (see :func:`build_drive_generator`).
 
     Returns:
         What was written.

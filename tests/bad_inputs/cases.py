@@ -221,7 +221,7 @@ models("drive", DRIVE, [b.poses_npz], "--model")
 add("drive default model missing", DRIVE, [b.poses_npz])
 options("drive", [*DRIVE, "--model", "{t}/garbage.pt"], [b.poses_npz, b.garbage_pt], {
     "--max-gap": ["-1", "99999999999"], "--threads": ["0"], "--method": ["bogus"], "--device": ["tpu"],
-    "--stage": ["bogus", "RAW", ""],
+    "--stage": ["bogus", "RAW", ""], "--runtime": ["bogus", ""],
 })
 paths("drive", DRIVE[:2], [b.poses_npz, *EVERY_OUTPUT], "--out",
       ["{t}/result", "{t}/out.avi", "{t}/old.mp4", "{t}/folder.mp4", "{t}/blocker/o.mp4", "/proc/o.mp4"])
