@@ -38,12 +38,6 @@ class LossConfig:
         spread_weight: weight of the range-of-motion loss (0 = off; not in the paper): the spread over time
             of every output channel should match the truth's. Where a 2D input leaves the motion ambiguous,
             the squared error alone is smallest for an average of the candidates, a damped motion.
-        code_weight: weight of the static-code spread (0 = off; not in the paper): for the skeleton and view
-            codes, the mean squared distance from each triplet anchor to its positive over that to its
-            negative. The triplet hinge stops pulling once the margin holds, so a code can keep what the
-            window shows of the motion (a reference's arms held low in every window damps the arm raise it
-            is given); this ratio keeps pulling until a code is the same for every window of one skeleton
-            (view) whatever the motion.
     """
 
     cross: bool = True
@@ -53,7 +47,7 @@ class LossConfig:
     foot_weight: float = 0.5
     trajectory_weight: float = 0.0
     spread_weight: float = 0.0
-    code_weight: float = 0.0
+
 
 
 # Ablations of the paper's objective, by plain name; an Ablation looks up the same entry.
@@ -168,29 +162,18 @@ def objective(
     if config.spread_weight > 0:
         spread = spread_error(out.flatten(0, 1), truth.flatten(0, 1)).reshape(len(combos), -1)
         losses["spread"] = config.spread_weight * spread.mean(dim=1).sum()
-    if config.triplet or config.code_weight > 0:
-        pairs = _code_pairs(model, inputs, triple)
-        if config.triplet:
-            losses["triplet"] = config.triplet_weight * sum(
-                2 * F.triplet_margin_loss(a, own, other, margin=config.triplet_margin) for _, a, own, other in pairs
-            )
-        if config.code_weight > 0:
-            losses["code"] = config.code_weight * sum(
-                code_spread(a, own, other) for factor, a, own, other in pairs if factor != MOTION
-            )
+    if config.triplet:
+        losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
     losses["total"] = sum(losses.values())
     return losses
 
 
-def _code_pairs(
-    model: RetargetNet, inputs: torch.Tensor, triple: dict[int, torch.Tensor]
-) -> list[tuple[int, torch.Tensor, torch.Tensor, torch.Tensor]]:
-    """``(factor, anchor, positive, negative)`` flat codes [2B, D] of every code the model has.
-
-    For each triple t, the anchor is the code of the window sharing only that factor with triple t; its
-    positive is triple t's code and its negative the other triple's.
-    """
-    pairs = []
+def _triplet(
+    model: RetargetNet, inputs: torch.Tensor, triple: dict[int, torch.Tensor], margin: float
+) -> torch.Tensor:
+    """For each code and each triple t: the code of the window sharing only that factor with triple t
+    (anchor) should be nearer to triple t's code (positive) than to the other triple's (negative)."""
+    total = inputs.new_zeros(())
     for factor, codes in triple.items():
         anchors = []
         for t in (0, 1):
@@ -200,19 +183,8 @@ def _code_pairs(
         anchor = _codes(model, torch.cat(anchors))[factor].flatten(1)  # [2B, D]
         own = codes.flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
         other = codes.flip(0).flatten(2).flatten(0, 1)
-        pairs.append((factor, anchor, own, other))
-    return pairs
-
-
-def code_spread(anchor: torch.Tensor, positive: torch.Tensor, negative: torch.Tensor) -> torch.Tensor:
-    """Mean squared anchor-positive distance over mean squared anchor-negative distance ([N, D] x3 -> scalar).
-
-    0 when every anchor equals its positive; 1 when the codes say nothing of the factor. It does not change
-    when the codes are scaled, so it cannot be met by shrinking them.
-    """
-    near = ((anchor - positive) ** 2).sum(dim=1).mean()
-    far = ((anchor - negative) ** 2).sum(dim=1).mean()
-    return near / far.clamp_min(1e-8)
+        total = total + 2 * F.triplet_margin_loss(anchor, own, other, margin=margin)
+    return total
 
 
 def self_reconstruction(

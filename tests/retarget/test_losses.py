@@ -7,7 +7,6 @@ from retarget.augment import combo_index
 from retarget.losses import (
     LossConfig,
     ablation_config,
-    code_spread,
     foot_velocity,
     objective,
     trajectory_error,
@@ -110,29 +109,3 @@ def test_trajectory_term_joins_the_objective_when_weighted():
     losses = objective(net, x, x, _stats(), LossConfig(trajectory_weight=0.5))
     assert "trajectory" in losses and float(losses["trajectory"].detach()) > 0
     assert "trajectory" not in objective(net, x, x, _stats(), LossConfig())
-
-
-def test_code_spread_is_the_distance_ratio_and_ignores_the_scale():
-    torch.manual_seed(0)
-    anchor, positive, negative = torch.randn(3, 6, 4).unbind(0)
-    near = ((anchor - positive) ** 2).sum(1).mean()
-    far = ((anchor - negative) ** 2).sum(1).mean()
-    torch.testing.assert_close(code_spread(anchor, positive, negative), near / far)
-    torch.testing.assert_close(code_spread(5 * anchor, 5 * positive, 5 * negative), near / far)
-    assert float(code_spread(anchor, anchor, negative)) == 0.0
-
-
-def test_code_term_pulls_the_static_codes_only():
-    torch.manual_seed(0)
-    net = RetargetNet().eval()
-    x = torch.randn(3, 8, 30, 32)
-    losses = objective(net, x, x, _stats(), LossConfig(cross=False, foot_weight=0.0, triplet=False, code_weight=2.0))
-    assert "triplet" not in losses
-    expected = 0.0
-    anchors = {net.encode_body: ((1, 0, 1), (0, 1, 0)), net.encode_view: ((1, 1, 0), (0, 0, 1))}
-    for enc, (anchor0, anchor1) in anchors.items():
-        a = enc(torch.cat([x[:, combo_index(*anchor0)], x[:, combo_index(*anchor1)]])).flatten(1)
-        own = torch.cat([enc(x[:, 0]), enc(x[:, 7])]).flatten(1)
-        other = torch.cat([enc(x[:, 7]), enc(x[:, 0])]).flatten(1)
-        expected = expected + code_spread(a, own, other)
-    torch.testing.assert_close(losses["code"], 2.0 * expected)

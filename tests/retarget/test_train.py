@@ -171,11 +171,11 @@ def test_resume_fills_settings_added_since_with_their_defaults(tmp_path):
     split = FakeSplit()
     fit(split, None, tmp_path / "r.pt", TINY, epochs=1)
     state = torch.load(tmp_path / "r.pt", weights_only=False)
-    del state["training"]["config"]["loss"]["code_weight"]  # as written before the setting existed
+    del state["training"]["config"]["extra_characters"]  # as written before the setting existed
     torch.save(state, tmp_path / "r.pt")
     assert fit(split, None, tmp_path / "r.pt", TINY, epochs=2, resume=True).epochs == 2
-    other = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, code_weight=1.0))
-    with pytest.raises(InputError, match="other settings.*loss"):
+    other = dataclasses.replace(TINY, extra_spread=2.0)
+    with pytest.raises(InputError, match="other settings.*extra_spread"):
         fit(split, None, tmp_path / "r.pt", other, epochs=3, resume=True)
 
 
