@@ -258,8 +258,8 @@ class RetargeterBase:
 
     def _finish(self, y: np.ndarray, fps: float, reference: ReferenceCodes, scale: float) -> PoseTrack:
         """[30, T] network output -> body15 track in the reference's pixels."""
-        # [T, 15, 2] canvas, worked out in the float64 copy of y (its memory order kept: time-major)
-        joints = channels_to_joints(y.astype(np.float64)[None], self.stats, overwrite=True)[0]
+        # [T, 15, 2] canvas, worked out in float64 (y's values converted as they are read), time-major
+        joints = channels_to_joints(y[None], self.stats, dtype=np.float64)[0]
         joints /= scale  # reference pixels
         smooth_joints(joints, self.preprocess.output_sigma, out=joints)  # in place, block by block
         # place(), its float64 sums rounded straight into the float32 joints of the track. They go where y lies
@@ -316,7 +316,7 @@ class RetargeterBase:
                 f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
             )
         prepared = prepare(track, self.preprocess, name)
-        # [30, T] float64, a view of [T, 30] made in the canvas' memory (nothing else uses it)
-        x = joints_to_channels(prepared.canvas[None], self.stats, overwrite=True)[0]
-        # Kept time-major: windows are cut and run that way (retarget.windows).
-        return np.ascontiguousarray(x.T, dtype=np.float32).T, prepared.scale, prepared.body15
+        # [30, T] float32, a view of [T, 30] (worked out in the canvas' memory, nothing else uses it), kept
+        # time-major: windows are cut and run that way (retarget.windows)
+        x = joints_to_channels(prepared.canvas[None], self.stats, overwrite=True, dtype=np.float32)[0]
+        return x, prepared.scale, prepared.body15

@@ -217,7 +217,9 @@ def _rows_in_place(joints: Array) -> np.ndarray | None:
     return joints
 
 
-def joints_to_channels(joints: Array, stats: NormStats, overwrite: bool = False) -> Array:
+def joints_to_channels(
+    joints: Array, stats: NormStats, overwrite: bool = False, dtype: np.dtype | type | None = None
+) -> Array:
     """The normalised network input of body15 poses.
 
     Args:
@@ -225,10 +227,16 @@ def joints_to_channels(joints: Array, stats: NormStats, overwrite: bool = False)
         stats: normalisation statistics.
         overwrite: ``joints`` may be used as the result's memory (a C-contiguous float array; otherwise
             this is ignored): on long tracks, a track-sized array fewer to allocate and touch.
+        dtype: (arrays only) the result's type when not that of ``joints``, e.g. float32 network input of
+            float64 poses: computed in ``joints``' type and rounded once, as ``.astype(dtype)`` of the
+            result would be, the last operation writing it (no pass over a converted copy).
 
     Returns:
-        [B, 30, T] of the same kind and dtype (channel ``2r + c`` = coordinate ``c`` of row ``r``).
+        [B, 30, T] of the same kind and dtype (or ``dtype``) (channel ``2r + c`` = coordinate ``c`` of row
+        ``r``); an array's is a view of a time-major ``[B, T, 30]`` one.
     """
+    if dtype is not None and _is_tensor(joints):
+        raise TypeError("joints_to_channels: dtype is for numpy arrays; convert a tensor with .to()")
     b, t = joints.shape[:2]
     rows = _rows_in_place(joints) if overwrite else None
     if rows is None:
@@ -236,16 +244,24 @@ def joints_to_channels(joints: Array, stats: NormStats, overwrite: bool = False)
     if _is_tensor(rows) or rows.dtype.kind != "f":
         x = rows.reshape(b, t, NUM_CHANNELS).swapaxes(1, 2)  # [B, 30, T]
         mean, std = _channel_stats(stats, x)
-        return (x - mean) / std
+        x = (x - mean) / std
+        return x if dtype is None else x.astype(dtype)
     # The same element-wise operations, in place on _rows' time-major array; a [B, 30, T] view of it.
     x = rows.reshape(b, t, NUM_CHANNELS)  # [B, T, 30]
     mean, std = _channel_stats(stats, x)
     x -= mean.reshape(1, 1, NUM_CHANNELS)
-    x /= std.reshape(1, 1, NUM_CHANNELS)
-    return x.swapaxes(1, 2)
+    out = x if dtype is None or np.dtype(dtype) == x.dtype else np.empty(x.shape, dtype=dtype)
+    np.divide(x, std.reshape(1, 1, NUM_CHANNELS), out=out, casting="unsafe")  # the quotient in x's type, rounded
+    return out.swapaxes(1, 2)
 
 
-def channels_to_joints(x: Array, stats: NormStats, start: Array | None = None, overwrite: bool = False) -> Array:
+def channels_to_joints(
+    x: Array,
+    stats: NormStats,
+    start: Array | None = None,
+    overwrite: bool = False,
+    dtype: np.dtype | type | None = None,
+) -> Array:
     """Undo :func:`joints_to_channels`: body15 poses whose root follows the integrated velocity.
 
     The root of frame ``t`` is ``start + v[0] + ... + v[t]`` (the authors' convention, ``v[0]`` included).
@@ -257,15 +273,20 @@ def channels_to_joints(x: Array, stats: NormStats, start: Array | None = None, o
         overwrite: ``x`` may be used as the result's memory (a time-major float array, e.g. a
             ``[B, 30, T]`` view of a fresh ``[B, T, 30]`` one; otherwise this is ignored): on long tracks, two
             track-sized arrays fewer to allocate and touch.
+        dtype: (arrays only) the type to compute in and return when not ``x``'s, e.g. float64 poses of a
+            float32 network output: ``x``'s values are converted as they are read, the numbers of
+            ``channels_to_joints(x.astype(dtype), ...)`` without that converted copy.
 
     Returns:
-        [B, T, 15, 2] body15 coordinates in the canvas, of ``x``'s kind and dtype.
+        [B, T, 15, 2] body15 coordinates in the canvas, of ``x``'s kind and dtype (or ``dtype``).
     """
     b, _, t = x.shape
-    mean, std = _channel_stats(stats, x)
     if _is_tensor(x):
         import torch
 
+        if dtype is not None:
+            raise TypeError("channels_to_joints: dtype is for numpy arrays; convert a tensor with .to()")
+        mean, std = _channel_stats(stats, x)
         rows = (x * std + mean).transpose(1, 2).reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
         root = torch.cumsum(rows[:, :, -1], dim=1)  # [B, T, 2]
         if start is not None:
@@ -275,19 +296,21 @@ def channels_to_joints(x: Array, stats: NormStats, start: Array | None = None, o
         return joints + root[:, :, None]
     # The same element-wise operations as above, time-major (the network's output is), run of joints by run of
     # joints, as points where possible (numpy broadcasts along a 2-long axis slowly): the same numbers.
+    work = x.dtype if dtype is None else np.dtype(dtype)
     shape = (1, 1, NUM_CHANNELS)
-    in_place = overwrite and x.dtype.kind == "f" and x.swapaxes(1, 2).flags.c_contiguous
+    mean, std = (a.reshape(shape).astype(work) for a in (stats.mean, stats.std))  # _channel_stats' numbers
+    in_place = overwrite and work == x.dtype and x.dtype.kind == "f" and x.swapaxes(1, 2).flags.c_contiguous
     if in_place:
         rows = x.swapaxes(1, 2)  # [B, T, 30], x's memory
-        rows *= std.reshape(shape)
+        rows *= std
     else:
-        rows = np.multiply(x.swapaxes(1, 2), std.reshape(shape), order="C")  # [B, T, 30]
-    rows += mean.reshape(shape)
+        rows = np.multiply(x.swapaxes(1, 2), std, dtype=work, order="C")  # [B, T, 30], a fresh array
+    rows += mean
     rows = rows.reshape(b, t, NUM_ROWS, 2)  # [B, T, 15, 2]
     root = np.cumsum(rows[:, :, -1], axis=1)  # [B, T, 2]
     if start is not None:
-        root = root + np.asarray(start, dtype=x.dtype).reshape(-1, 1, 2)
-    if in_place and _points(rows) is not None and _points(root) is not None:
+        root = root + np.asarray(start, dtype=work).reshape(-1, 1, 2)
+    if _points(rows) is not None and _points(root) is not None:  # rows is ours: x's memory, or fresh
         # Rows become joints where they lie: row r goes to joint LOCAL_INDEX[r] >= r, so going down from the
         # last row each one is read before anything is written over it (a run that moves, one row at a time).
         points, origin = _points(rows), _points(root)  # [B, T, 15], [B, T]
@@ -299,13 +322,7 @@ def channels_to_joints(x: Array, stats: NormStats, start: Array | None = None, o
                 np.add(points[:, :, r], origin, out=points[:, :, in_joints.start + r - in_rows.start])
         np.add(0.0, origin, out=points[:, :, ROOT_INDEX])  # (0 + root, as the zeros above give)
         return rows
-    joints = np.empty((b, t, len(LAYOUT), 2), dtype=x.dtype)
-    points, origin, out = _points(rows), _points(root), _points(joints)  # [B, T, 15], [B, T], [B, T, 15]
-    if points is not None and origin is not None and out is not None:
-        for in_rows, in_joints in _LOCAL_RUNS:
-            np.add(points[:, :, in_rows], origin[:, :, None], out=out[:, :, in_joints])
-        np.add(0.0, origin, out=out[:, :, ROOT_INDEX])  # (0 + root, as the zeros above give)
-        return joints
+    joints = np.empty((b, t, len(LAYOUT), 2), dtype=work)  # not floats: a coordinate at a time
     for c in (0, 1):
         origin = root[:, :, None, c]  # [B, T, 1]
         for in_rows, in_joints in _LOCAL_RUNS:
@@ -365,8 +382,11 @@ def _without_outliers(track: PoseTrack, name: str) -> PoseTrack:
 
 
 def _body15_joints(track: PoseTrack, name: str) -> np.ndarray:
-    """``to_body15(track, name).joints`` ([T, 15, 2] float32) without validating a new body15 track."""
+    """``to_body15(track, name).joints`` ([T, 15, 2] float32) without validating a new body15 track; a body15
+    track's own joints (read-only), not a copy of them."""
     track = _without_outliers(track, name)
+    if track.layout == LAYOUT.name:
+        return track.joints
     return convert_joints(track.joints, track.joint_layout, LAYOUT)
 
 

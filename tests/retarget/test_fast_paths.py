@@ -199,3 +199,48 @@ def test_finished_tracks_are_the_plain_formula_and_share_no_memory():
         assert _same(moved.joints, expected.astype(np.float32))
     for i, a in enumerate(many):
         assert not any(np.shares_memory(a.joints, b.joints) for b in many[i + 1 :])
+
+
+@pytest.mark.parametrize("frames", [1, 9, 1001])
+def test_channels_in_another_type_are_the_plain_formulas_converted(frames):
+    """joints_to_channels(..., dtype=float32) is the float64 result rounded once; channels_to_joints(x32,
+    dtype=float64) the float64 formula of the converted x: no converted copy made, the same numbers."""
+    rng = np.random.default_rng(frames + 10)
+    stats = _stats(rng)
+    joints = _joints(rng, (2, frames))
+    expected = _reference_to_channels(joints, stats).astype(np.float32)
+    for overwrite in (False, True):
+        got = joints_to_channels(joints.copy(), stats, overwrite=overwrite, dtype=np.float32)
+        assert _same(got, expected) and got.swapaxes(1, 2).flags.c_contiguous  # time-major, as the network works
+    x = rng.normal(0, 1, (2, NUM_CHANNELS, frames)).astype(np.float32)
+    start = rng.normal(0, 100, (2, 2))
+    for inp in (x, np.ascontiguousarray(x.swapaxes(1, 2)).swapaxes(1, 2)):
+        for with_start in (None, start):
+            expected = _reference_to_joints(inp.astype(np.float64), stats, with_start)
+            assert _same(channels_to_joints(inp, stats, with_start, dtype=np.float64), expected)
+            mine = inp.copy(order="K")  # not of the result's type: never its memory, left as it was
+            assert _same(channels_to_joints(mine, stats, with_start, overwrite=True, dtype=np.float64), expected)
+            assert _same(mine, inp)
+
+
+def test_channel_types_are_for_arrays():
+    torch = pytest.importorskip("torch")
+    stats = _stats(np.random.default_rng(5))
+    with pytest.raises(TypeError, match="numpy arrays"):
+        joints_to_channels(torch.zeros(1, 4, len(LAYOUT), 2), stats, dtype=np.float32)
+    with pytest.raises(TypeError, match="numpy arrays"):
+        channels_to_joints(torch.zeros(1, NUM_CHANNELS, 4), stats, dtype=np.float64)
+
+
+def test_a_body15_track_is_prepared_from_its_own_joints():
+    """No converted copy of a track already in body15: its own (read-only) joints, the numbers of its body25
+    original's conversion."""
+    from retarget.preprocess import PreprocessConfig, _body15_joints, prepare
+    from tests.figures import walking_figure
+
+    body25 = walking_figure(80, dropped=0.1, always_seen=("mid_hip", "l_ankle", "r_ankle"), seed=3)
+    body15 = body25.to_layout(LAYOUT.name)
+    assert _body15_joints(body15, "t") is body15.joints and not body15.joints.flags.writeable
+    for config in (PreprocessConfig(), PreprocessConfig(body_height=150.0)):
+        a, b = prepare(body25, config), prepare(body15, config)
+        assert _same(a.canvas, b.canvas) and a.scale == b.scale and _same(a.body15, b.body15)
