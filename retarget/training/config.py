@@ -1,0 +1,87 @@
+"""The settings of a training run: :class:`TrainConfig` (stored as a plain dict in its checkpoint)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+from retarget.augment import AugmentConfig
+from retarget.losses import LossConfig
+from retarget.model import variant_config
+from retarget.preprocess import PreprocessConfig
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that decides what is learned (defaults: the paper's / the authors' settings).
+
+    Attributes:
+        variant: network variant (:data:`retarget.model.VARIANTS`).
+        window: frames per training window (the longest clip length).
+        batch_size: samples per step (each sample has 8 windows).
+        lr: Adam learning rate.
+        amsgrad: use the AMSGrad variant.
+        lr_decay: learning-rate factor per epoch.
+        samples_per_epoch: random samples per epoch (validation and a checkpoint follow every epoch).
+        val_samples: fixed validation samples (from the "val" split).
+        stats_windows: random training windows the normalisation statistics are computed from.
+        real_batch_size: real-track windows per step (when real tracks are given).
+        real_weight: weight of their self-reconstruction loss.
+        seed: seed of every random choice.
+        augment: augmentation settings.
+        loss: objective settings (see :data:`retarget.losses.ABLATIONS`).
+        preprocess: canvas and smoothing used at inference (stored in the checkpoint).
+        body_normalise: bring every character to one skeleton height in training, and every track to it at
+            inference, instead of scaling by the image height (the target height is that of the initial
+            weights' mean pose, or the median character's; stored in the checkpoint's preprocessing).
+    """
+
+    variant: str = "full"
+    window: int = 64
+    batch_size: int = 64
+    lr: float = 1e-3
+    amsgrad: bool = True
+    lr_decay: float = 0.99
+    samples_per_epoch: int = 6400
+    val_samples: int = 256
+    stats_windows: int = 2048
+    real_batch_size: int = 16
+    real_weight: float = 1.0
+    seed: int = 0
+    augment: AugmentConfig = field(default_factory=AugmentConfig)
+    loss: LossConfig = field(default_factory=LossConfig)
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    body_normalise: bool = True
+    extra_characters: int = 0
+    extra_spread: float = 1.0
+
+    def __post_init__(self) -> None:
+        variant_config(self.variant)  # ValueError for an unknown name
+        if self.window % 8 or max(self.augment.clip_lengths) > self.window:
+            raise ValueError("window must be a multiple of 8 and at least every clip length")
+        if self.batch_size <= 0:
+            raise ValueError("batch_size must be positive")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dict (lists for tuples)."""
+        def plain(value: Any) -> Any:
+            if isinstance(value, dict):
+                return {k: plain(v) for k, v in value.items()}
+            return list(value) if isinstance(value, tuple) else value
+
+        return plain(dataclasses.asdict(self))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        """Inverse of :meth:`to_dict`."""
+        nested = {"augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig}
+        values = dict(data)
+        for key, kind in nested.items():
+            if key in values:
+                values[key] = kind(**{k: tuple(v) if isinstance(v, list) else v for k, v in values[key].items()})
+        return cls(**values)
+
+
+# The paper's settings; a shared default argument is safe as the config is frozen.
+DEFAULT_CONFIG = TrainConfig()

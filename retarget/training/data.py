@@ -1,0 +1,201 @@
+"""What training reads: cross samples of a world split, real-track windows, normalisation statistics, body
+scales, the validation set and the data loader of one epoch."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator, Sequence
+from typing import Protocol
+
+import numpy as np
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from pose_io.errors import InputError
+from pose_io.measures import skeleton_heights
+from pose_io.track import PoseTrack
+from retarget.augment import COMBOS
+from retarget.model import variant_config
+from retarget.preprocess import (
+    LAYOUT,
+    LOCAL_INDEX,
+    NormStats,
+    PreprocessConfig,
+    prepare_track,
+    row_statistics,
+)
+from retarget.training.config import TrainConfig
+
+log = logging.getLogger(__name__)
+
+
+class WorldSplit(Protocol):
+    """What training needs from a split of the motion world."""
+
+    num_motions: int
+    num_characters: int
+    num_views: int
+
+    def window(
+        self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
+        rng: np.random.Generator | None = None,
+    ) -> np.ndarray: ...
+
+
+class CrossSamples(Dataset):
+    """Samples of two (motion, character, view) triples and the windows of their 8 combinations.
+
+    Sample ``index`` of epoch ``epoch`` is a pure function of (seed, epoch, index), so training resumes
+    exactly and data-loader workers need no shared state. The two motions always differ; characters
+    (views) differ when the network has a skeleton (view) encoder, and are shared otherwise. Every
+    window of one view is seen through the same camera (the world's ``rng`` draws the camera pitch).
+
+    Args:
+        split: a world split.
+        length: frames per window.
+        variant: network variant.
+        size: samples per epoch.
+        seed: seed.
+        scales: optional [C] factor per character (body-height normalisation), applied about the origin.
+    """
+
+    def __init__(
+        self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None
+    ) -> None:
+        if split.num_motions < 2:
+            raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
+        config = variant_config(variant)
+        self.split = split
+        self.length = length
+        self.size = size
+        self.seed = seed
+        self.scales = scales
+        self.epoch = 0
+        self.vary_character = config.body_channels is not None and split.num_characters > 1
+        self.vary_view = config.view_channels is not None and split.num_views > 1
+
+    def __len__(self) -> int:
+        return self.size
+
+    def sample(self, epoch: int, index: int) -> dict[str, np.ndarray]:
+        """{"windows": [8, length, 15, 2] float32 (order of :data:`COMBOS`), "ids": [2, 3] int64}."""
+        rng = np.random.default_rng([self.seed, epoch, index])
+        motions = rng.choice(self.split.num_motions, 2, replace=False)
+        chars = _pair(rng, self.split.num_characters, self.vary_character)
+        views = _pair(rng, self.split.num_views, self.vary_view)
+        # The world's `rng` perturbs the camera (pitch): a fresh generator per view slot gives every
+        # window seen from one view the same camera.
+        view_seeds = rng.integers(0, 2**63 - 1, size=2)
+        if views[0] == views[1]:
+            view_seeds[1] = view_seeds[0]
+        cache: dict[tuple[int, int, int], np.ndarray] = {}
+        windows = []
+        for m, c, v in COMBOS:
+            key = (int(motions[m]), int(chars[c]), int(views[v]))
+            if key not in cache:
+                camera = np.random.default_rng(int(view_seeds[v]))
+                window = self.split.window(*key, length=self.length, offset=0, rng=camera)
+                if self.scales is not None:
+                    window = window * self.scales[key[1]]
+                cache[key] = np.asarray(window, np.float32)
+            windows.append(cache[key])
+        ids = np.stack([motions, chars, views], axis=1).astype(np.int64)  # [2, 3]
+        return {"windows": np.stack(windows), "ids": ids}
+
+    def __getitem__(self, index: int) -> dict[str, np.ndarray]:
+        return self.sample(self.epoch, index)
+
+
+def _pair(rng: np.random.Generator, n: int, distinct: bool) -> np.ndarray:
+    if distinct:
+        return rng.choice(n, 2, replace=False)
+    return np.repeat(rng.integers(n), 2)
+
+
+def split_statistics(
+    split: WorldSplit, length: int, count: int, seed: int, scales: np.ndarray | None = None
+) -> NormStats:
+    """Normalisation statistics of ``count`` random windows of a split (each scaled by its character's factor)."""
+    rng = np.random.default_rng([seed, 7919])
+    windows = []
+    for _ in range(count):
+        m, c, v = (int(rng.integers(n)) for n in (split.num_motions, split.num_characters, split.num_views))
+        window = split.window(m, c, v, length=length, offset=0, rng=rng)
+        windows.append(window * (1.0 if scales is None else scales[c]))
+    return row_statistics(np.stack(windows))
+
+
+def character_heights(split: WorldSplit, length: int, per_character: int, seed: int) -> np.ndarray:
+    """[C] median skeleton height (canvas pixels) of each character over ``per_character`` random windows."""
+    rng = np.random.default_rng([seed, 3571])
+    heights = np.empty(split.num_characters)
+    for c in range(split.num_characters):
+        windows = np.stack([
+            split.window(int(rng.integers(split.num_motions)), c, int(rng.integers(split.num_views)),
+                         length=length, offset=0, rng=rng)
+            for _ in range(per_character)
+        ])  # fmt: skip
+        heights[c] = np.nanmedian(skeleton_heights(windows, LAYOUT))
+    return heights
+
+
+def mean_pose_height(stats: NormStats) -> float:
+    """Skeleton height of the mean pose that normalisation statistics describe (canvas pixels)."""
+    joints = np.zeros((1, 1, len(LAYOUT), 2))
+    joints[0, 0, list(LOCAL_INDEX)] = stats.mean[:-1]
+    return float(skeleton_heights(joints, LAYOUT)[0])
+
+
+def body_scales(split: WorldSplit, config: TrainConfig, target: float) -> np.ndarray | None:
+    """[C] factor bringing each character of ``split`` to ``target`` skeleton height (None: no normalisation)."""
+    if not config.body_normalise:
+        return None
+    return target / character_heights(split, config.window, 8, config.seed)
+
+
+def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: PreprocessConfig) -> np.ndarray:
+    """Overlapping windows (half-window steps) of real tracks in the canvas: [N, length, 15, 2] float32."""
+    out = []
+    for i, track in enumerate(tracks):
+        if len(track) < length:
+            log.warning("real track %d has %d frames (< %d); skipped", i, len(track), length)
+            continue
+        joints = prepare_track(track, preprocess, f"real track {i}")
+        out += [joints[s : s + length] for s in range(0, len(joints) - length + 1, max(1, length // 2))]
+    return np.asarray(out, dtype=np.float32).reshape(-1, length, 15, 2)
+
+
+
+def _validation_set(
+    split: WorldSplit, config: TrainConfig, scales: np.ndarray | None
+) -> tuple[torch.Tensor, torch.Tensor] | None:
+    if split.num_motions < 2:
+        log.warning("validation split has fewer than 2 motions; no validation")
+        return None
+    samples = CrossSamples(split, config.window, config.variant, config.val_samples, config.seed + 1, scales)
+    items = [samples.sample(0, i) for i in range(config.val_samples)]
+    windows = torch.from_numpy(np.stack([it["windows"] for it in items]))  # [N, 8, T, 15, 2]
+    ids = torch.from_numpy(np.stack([it["ids"] for it in items]))  # [N, 2, 3]
+    return windows, ids
+
+
+def _loader(
+    dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int, part: slice | None = None,
+    pin: bool = False,
+) -> Iterator:
+    """Batches of steps ``first_step`` to ``steps``; with ``part``, this process's samples of each global batch.
+
+    Step s of an epoch is samples ``[s * batch_size, (s + 1) * batch_size)`` whatever the number of
+    processes; a process takes ``part`` of them.
+    """
+    if part is None or (part.start, part.stop) == (0, batch_size):
+        indices: Sequence[int] = range(first_step * batch_size, steps * batch_size)
+        per_step = batch_size
+    else:
+        indices = [s * batch_size + i for s in range(first_step, steps) for i in range(part.start, part.stop)]
+        per_step = part.stop - part.start
+    # Its own generator: a loader would otherwise draw its worker seed from the global RNG, and a resumed
+    # run would then drop out differently. Samples depend on (seed, epoch, index) only.
+    loader = DataLoader(dataset, batch_size=per_step, sampler=indices, num_workers=workers, drop_last=True,
+                        generator=torch.Generator(), pin_memory=pin)
+    return iter(loader)
