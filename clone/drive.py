@@ -132,7 +132,7 @@ def global_scale_onto(driver: PoseTrack, model: ReferenceModel) -> PoseTrack:
 
 def drive_poses(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE,
+    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
 ) -> tuple[PoseTrack, StageFit | None]:
     """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
 
@@ -144,6 +144,8 @@ def drive_poses(
         device: where the retargeting network runs.
         stage: one of :data:`STAGES`: ``reference`` keeps the ``retarget`` and ``global-scale`` results on the
             part of the frame the reference occupied (:func:`clone.stage.fit_to_stage`); ``raw`` does not.
+        foot_lock: clean up the ``retarget`` result's foot skating with the driver's foot contacts
+            (:func:`pose_io.feet.lock_feet`), before the stage fit, which moves the whole track at once.
 
     Returns:
         ``(track, fit)``; ``fit`` is None when the stage was not applied (``raw``, or ``--method none``).
@@ -161,6 +163,10 @@ def drive_poses(
         return driver.replace(image_size=model.canvas.image_size), None
     if method is Method.RETARGET:
         driven = retarget_onto(driver, model, weights, device)
+        if foot_lock:
+            from pose_io.feet import lock_feet
+
+            driven = lock_feet(driven, driver)
     else:
         driven = global_scale_onto(driver, model)
     if stage is StageMode.RAW:
@@ -170,11 +176,11 @@ def drive_poses(
 
 def move_onto_reference(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE,
+    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
 ) -> PoseTrack:
     """The driver's poses in the reference's pixels (see :func:`drive_poses`, which also says how far they
     were moved to stay on the reference's stage)."""
-    return drive_poses(driver, model, method, weights, device, stage)[0]
+    return drive_poses(driver, model, method, weights, device, stage, foot_lock)[0]
 
 
 # ------------------------------------------------------------------------------------------------ frames
@@ -309,6 +315,7 @@ def drive(
     max_gap: int = 5,
     progress: Callable[[int, int], None] | None = None,
     runtime: str = "auto",
+    foot_lock: bool = True,
 ) -> DriveResult:
     """Make a video of the reference performing the driver's motion.
 
@@ -328,6 +335,7 @@ def drive(
         progress: called with (frames done, total) after every frame.
         runtime: the generator's runtime: ``auto`` (int8 ONNX Runtime on a CPU when the ``fast`` extra is
             installed, else torch), ``torch``, ``onnx`` or ``int8`` (see :func:`build_drive_generator`).
+        foot_lock: clean up foot skating of ``retarget`` with the driver's contacts (see :func:`drive_poses`).
 
     Returns:
         What was written.
@@ -355,7 +363,7 @@ def drive(
     check_new_output(out, overwrite)
     model = load_reference_model(model_path)
     driver = read_driver(driver_path, max_gap)
-    driven, fit = drive_poses(driver, model, method, weights, str(device), stage)
+    driven, fit = drive_poses(driver, model, method, weights, str(device), stage, foot_lock)
     poses_path = Path(poses_out) if poses_out is not None else None
     if poses_path is not None:
         check_poses_out(driven, poses_path, overwrite)

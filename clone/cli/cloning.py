@@ -176,6 +176,11 @@ def drive(
         "0.003 lower on the demo, ~3 s to quantise once per model (then cached); onnx: ONNX Runtime fp32, "
         "1.5-1.8x torch, same frames; torch: PyTorch, also on GPUs; auto: int8 on a CPU with the `fast` extra, "
         "else torch.")] = "auto",
+    foot_lock: Annotated[bool, typer.Option(
+        "--foot-lock/--no-foot-lock",
+        help="--method retarget: hold the feet still while the driver's feet touch the ground (moves the body "
+        "against the slide, then the ankles, knees re-solved; removes foot skating at the same pose error).")
+    ] = True,
 ) -> None:
     """Make a video of the reference performing the driver's motion."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -196,7 +201,7 @@ def drive(
         task = bar.add_task("drive", total=None)
         result = run_drive(
             drive_poses, out, model_path=model, method=method.value, stage=stage.value, poses_out=poses_out,
-            side_by_side=side_by_side,
+            side_by_side=side_by_side, foot_lock=foot_lock,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap, runtime=runtime,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )

@@ -66,6 +66,9 @@ def apply(
     ] = None,
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
+    foot_lock: Annotated[bool, typer.Option(
+        "--foot-lock/--no-foot-lock", help="Hold the feet still while the driver's feet touch the ground "
+        "(the body moved against the slide, then the ankles; knees re-solved).")] = True,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
     from clone.outputs import FOLDER, check_number, check_output
@@ -96,6 +99,10 @@ def apply(
     view_track = read_track(view, image_size=image_size) if view is not None else None
     retargeter = _retargeter(weights, device, backend, threads)
     codes = retargeter.reference_codes(reference, view_track, name=str(skeleton), view_name=str(view))
+    if foot_lock:
+        from retarget.foot_lock import FootLockedRetargeter
+
+        retargeter = FootLockedRetargeter(retargeter)
     if batch:
         with _progress("retargeting") as update:
             frames = retarget_files(retargeter, codes, motions, outputs, fmt=fmt, overwrite=overwrite,

@@ -11,7 +11,8 @@ the methods share one scale.
 * foot skating: the horizontal slide of an ankle between two frames in which it is in contact. An ankle is in
   contact when it is within ``height_tol * height`` of its lowest point (largest y) over a centred window and
   moves slowly *vertically* (``|dy| <= speed_tol * height``). Horizontal speed is deliberately not part of the
-  contact test, otherwise the test would cap the very slide it measures.
+  contact test, otherwise the test would cap the very slide it measures. The test lives in ``pose_io.feet``
+  (``foot_contacts``), shared with the foot-contact cleanup of `clone drive`.
 * temporal jitter: the mean norm of the second difference ``x[t+1] - 2 x[t] + x[t-1]`` of every joint.
 * outside share: the share of present joints outside the image.
 * against ground-truth poses (``pose_io.measures``, the definitions `clone retarget eval` uses): the pose error
@@ -29,6 +30,7 @@ import numpy as np
 
 from clone.metrics.table import Scores, nan_mean, row_means
 from pose_io.errors import InputError
+from pose_io.feet import contact_window, foot_contacts  # one home: the cleanup honours the same contacts
 from pose_io.layouts import JointLayout
 from pose_io.measures import (
     ANKLES,
@@ -73,51 +75,6 @@ def limb_error(
         )
     errors = np.abs(lengths - reference_lengths) / height * 100.0
     return row_means(errors), errors
-
-
-def _window_max(values: np.ndarray, window: int) -> np.ndarray:
-    """[T] NaN-ignoring maximum of ``values`` [T] over a centred window of ``window`` frames."""
-    half = max(0, window // 2)
-    padded = np.pad(values, half, constant_values=np.nan)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1)  # [T, 2 half + 1]
-    out = np.full(values.shape, np.nan)
-    seen = ~np.isnan(windows).all(axis=1)
-    out[seen] = np.nanmax(windows[seen], axis=1)
-    return out
-
-
-def foot_contacts(
-    joints: np.ndarray,
-    height: float,
-    layout: JointLayout | str = "body15",
-    window: int = 31,
-    height_tol: float = 0.02,
-    speed_tol: float = 0.01,
-) -> np.ndarray:
-    """Which ankles touch the ground in which frames.
-
-    Args:
-        joints: [T, J, 2] pixel coordinates (y down).
-        height: body height in pixels; the tolerances are fractions of it.
-        layout: joint layout of ``joints`` (needs ``l_ankle``, ``r_ankle``).
-        window: frames of the centred window whose lowest ankle point is the ground (about a second).
-        height_tol: how far above that point (in heights) an ankle may be and still touch.
-        speed_tol: the largest vertical move (heights per frame) of an ankle that touches.
-
-    Returns:
-        [T, 2] bool, columns in ``ANKLES`` order.
-    """
-    layout = as_layout(layout)
-    feet = check_joints(joints, layout, "foot contacts")[:, layout.indices(ANKLES)]  # [T, 2, 2]
-    y = feet[..., 1]  # [T, 2]
-    contact = np.zeros(y.shape, dtype=bool)
-    for f in range(y.shape[1]):
-        ground = _window_max(y[:, f], window)
-        dy = np.abs(np.diff(y[:, f]))
-        speed = np.concatenate([dy[:1], dy]) if dy.size else np.zeros(1)  # frame 0 uses the next step
-        with np.errstate(invalid="ignore"):
-            contact[:, f] = (y[:, f] >= ground - height_tol * height) & (speed <= speed_tol * height)
-    return contact
 
 
 def foot_slide(
@@ -281,11 +238,6 @@ def gt_pose_scores(
         per_frame[f"pck_{alpha:g}"] = row_means(pck_hits(dist, alpha))
     summary.update(total)
     return Scores(per_frame, summary)
-
-
-def contact_window(fps: float) -> int:
-    """Odd number of frames closest to one second: the window in which an ankle's lowest point is the ground."""
-    return round(fps) // 2 * 2 + 1
 
 
 def evaluate_track(

@@ -1,0 +1,51 @@
+"""Retargeting with the foot-contact cleanup (``pose_io.feet``): `clone retarget apply`'s default.
+
+A thin wrapper around either backend. It finds each driver's foot contacts while the driver is prepared (the
+batch path keeps only the network input of a track after that, :func:`retarget.batch.retarget_files`) and cleans
+every result with them. numpy only: the numpy backend stays torch-free.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from pose_io.feet import FootLockConfig, foot_lock, track_contacts
+from pose_io.track import PoseTrack
+from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
+
+LAYOUT = "body15"  # what the network reads and writes
+
+
+class FootLockedRetargeter:
+    """``prepare_motion`` / ``retarget_prepared`` / ``retarget`` of ``inner``, each result foot-locked.
+
+    Args:
+        inner: either backend.
+        config: contact test and cleanup settings.
+    """
+
+    def __init__(self, inner: RetargeterBase, config: FootLockConfig = FootLockConfig()) -> None:
+        self.inner = inner
+        self.config = config
+        self._contacts: dict[int, np.ndarray] = {}  # id(prepared motion) -> [T, 2] bool, until retargeted
+
+    def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> PreparedMotion:
+        """The network input of ``motion`` (``inner``'s), its foot contacts kept for its result."""
+        prepared = self.inner.prepare_motion(motion, name)
+        body = motion if motion.layout == LAYOUT else motion.to_layout(LAYOUT)
+        self._contacts[id(prepared)] = track_contacts(body, self.config)
+        return prepared
+
+    def retarget_prepared(self, motions: Sequence[PreparedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
+        """``inner``'s results for motions prepared by this wrapper, each cleaned with its driver's contacts."""
+        results = self.inner.retarget_prepared(motions, reference)
+        return [
+            r.replace(joints=foot_lock(r.joints, self._contacts.pop(id(m)), r.layout, self.config))
+            for r, m in zip(results, motions)
+        ]
+
+    def retarget(self, motion: PoseTrack, reference: ReferenceCodes, *, name: str = "motion track") -> PoseTrack:
+        """``inner.retarget`` of one track, foot-locked."""
+        return self.retarget_prepared([self.prepare_motion(motion, name)], reference)[0]
