@@ -38,6 +38,10 @@ class LossConfig:
         spread_weight: weight of the range-of-motion loss (0 = off; not in the paper): the spread over time
             of every output channel should match the truth's. Where a 2D input leaves the motion ambiguous,
             the squared error alone is smallest for an average of the candidates, a damped motion.
+        cycle_weight: weight of the cycle term on unlabelled windows (0 = off; not in the paper): a window's
+            motion moved onto another window's skeleton and view, encoded again and moved back onto its own,
+            should give the window back. Real tracks have no ground truth for a cross combination, so this is
+            what checks that retargeting them keeps the motion (a damped copy cannot be undone).
     """
 
     cross: bool = True
@@ -47,6 +51,7 @@ class LossConfig:
     foot_weight: float = 0.5
     trajectory_weight: float = 0.0
     spread_weight: float = 0.0
+    cycle_weight: float = 0.0
 
 
 
@@ -206,5 +211,26 @@ def self_reconstruction(
         losses["foot"] = config.foot_weight * foot.mean()
     if config.trajectory_weight > 0:
         losses["trajectory"] = config.trajectory_weight * trajectory_error(out, targets).mean()
+    if config.cycle_weight > 0 and len(inputs) > 1:
+        losses["cycle"] = config.cycle_weight * ((cycle(model, inputs) - targets) ** 2).mean()
     losses["total"] = sum(losses.values())
     return losses
+
+
+def cycle(model: RetargetNet, inputs: torch.Tensor) -> torch.Tensor:
+    """Each window's motion moved onto the next window's static codes (batch order, cyclic) and back onto its own.
+
+    Args:
+        model: the network.
+        inputs: [B, 30, T] normalised windows (B >= 2).
+
+    Returns:
+        [B, 30, T] the windows after the round trip.
+    """
+    def static(x: torch.Tensor) -> tuple[torch.Tensor | None, torch.Tensor | None]:
+        body = model.encode_body(x) if model.body_encoder is not None else None
+        view = model.encode_view(x) if model.view_encoder is not None else None
+        return body, view
+
+    moved = model.decode(model.encode_motion(inputs), *static(torch.roll(inputs, 1, dims=0)))
+    return model.decode(model.encode_motion(moved), *static(inputs))

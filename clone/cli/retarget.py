@@ -210,6 +210,10 @@ def train(
     spread_weight: Annotated[
         float, typer.Option("--spread-weight", min=0.0, help="Weight of the range-of-motion loss (0 = the paper).")
     ] = 0.5,
+    cycle_weight: Annotated[
+        float, typer.Option("--cycle-weight", min=0.0, help="Weight of the cycle term on the --real tracks: a motion "
+                            "moved onto another track and back should come back unchanged (0 = the paper).")
+    ] = 0.0,
     extra_characters: Annotated[
         int, typer.Option("--extra-characters", min=0, help="Training characters added to the world's 64 (their "
                           "own random draws; validation and test characters unchanged).")
@@ -260,6 +264,7 @@ def train(
         loss = dataclasses.replace(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
+            cycle_weight=cycle_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread)

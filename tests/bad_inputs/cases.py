@@ -158,7 +158,7 @@ TRAIN = ["retarget", "train", "--mocap", "{t}/mocap", "--out", "{t}/new.pt", "--
 options("retarget train", TRAIN, [b.mocap_empty], {
     "--minutes": NEG_FLOATS, "--epochs": BAD_COUNTS, "--lr": ["0", "nan", "inf", "2"],
     "--trajectory-weight": ["-1", "nan", "inf"], "--foot-weight": ["-1", "nan"], "--triplet-weight": ["nan"],
-    "--triplet-margin": ["-1", "inf"], "--spread-weight": ["nan"],
+    "--triplet-margin": ["-1", "inf"], "--spread-weight": ["nan"], "--cycle-weight": ["-1", "nan"],
     "--extra-characters": ["-1", "99999"], "--extra-spread": ["0", "nan", "9"], "--batch-size": ["0", "999999999"],
     "--workers": ["-1", "999999"], "--threads": ["0", "9999999"], "--variant": ["bogus"], "--ablation": ["x"],
 })

@@ -109,3 +109,21 @@ def test_trajectory_term_joins_the_objective_when_weighted():
     losses = objective(net, x, x, _stats(), LossConfig(trajectory_weight=0.5))
     assert "trajectory" in losses and float(losses["trajectory"].detach()) > 0
     assert "trajectory" not in objective(net, x, x, _stats(), LossConfig())
+
+
+def test_cycle_term_is_the_round_trip_through_the_next_windows_codes():
+    from retarget.losses import cycle, self_reconstruction
+
+    torch.manual_seed(0)
+    net = RetargetNet().eval()
+    x = torch.randn(3, 30, 32)
+    back = cycle(net, x)
+    # window 0 goes through window 2's codes (cyclic batch order) and back through its own
+    moved = net.decode(net.encode_motion(x[:1]), net.encode_body(x[2:]), net.encode_view(x[2:]))
+    expected = net.decode(net.encode_motion(moved), net.encode_body(x[:1]), net.encode_view(x[:1]))
+    torch.testing.assert_close(back[:1], expected)
+    losses = self_reconstruction(net, x, x, _stats(), LossConfig(foot_weight=0.0, cycle_weight=2.0))
+    torch.testing.assert_close(losses["cycle"], 2.0 * ((back - x) ** 2).mean())
+    assert "cycle" not in self_reconstruction(net, x[:1], x[:1], _stats(), LossConfig(foot_weight=0.0, cycle_weight=2.0))
+    # off by default
+    assert "cycle" not in self_reconstruction(net, x, x, _stats(), LossConfig(foot_weight=0.0))
