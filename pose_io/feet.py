@@ -23,6 +23,7 @@
 
 from __future__ import annotations
 
+import itertools
 import logging
 from dataclasses import dataclass
 
@@ -61,6 +62,9 @@ class FootLockConfig:
             raise ValueError(f"foot lock: blend must be >= 0 frames, got {self.blend}")
         if not self.root_sigma >= 0:
             raise ValueError(f"foot lock: root_sigma must be >= 0 frames, got {self.root_sigma}")
+
+
+DEFAULT_FOOT_LOCK = FootLockConfig()
 
 
 def contact_window(fps: float) -> int:
@@ -113,7 +117,7 @@ def foot_contacts(
     return contact
 
 
-def track_contacts(track: PoseTrack, config: FootLockConfig = FootLockConfig()) -> np.ndarray:
+def track_contacts(track: PoseTrack, config: FootLockConfig = DEFAULT_FOOT_LOCK) -> np.ndarray:
     """``foot_contacts`` of a track at its own height and a one-second window of its fps.
 
     Returns:
@@ -159,7 +163,7 @@ def ankle_offsets(ankle: np.ndarray, contact: np.ndarray, blend: int) -> np.ndar
             runs.append((start, stop))
     if blend > 0 and runs:
         offset = np.nan_to_num(offset)  # a missing contact frame gives no correction to fade
-        edges = [(None, runs[0][0])] + [(a[1], b[0]) for a, b in zip(runs, runs[1:])] + [(runs[-1][1], None)]
+        edges = [(None, runs[0][0])] + [(a[1], b[0]) for a, b in itertools.pairwise(runs)] + [(runs[-1][1], None)]
         for stop, start in edges:  # the gap between the run that stops at `stop` and the one starting at `start`
             lo, hi = (start - blend if stop is None else stop), (stop + blend if start is None else start)
             lo, hi = max(lo, 0), min(hi, total)
@@ -279,7 +283,7 @@ def foot_lock(
     joints: np.ndarray,
     contacts: np.ndarray,
     layout: JointLayout | str = "body15",
-    config: FootLockConfig = FootLockConfig(),
+    config: FootLockConfig = DEFAULT_FOOT_LOCK,
 ) -> np.ndarray:
     """Cancel the feet's slide while they touch the ground: move the body, hold the ankles, re-solve the knees.
 
@@ -327,7 +331,7 @@ def foot_lock(
     return out
 
 
-def lock_feet(track: PoseTrack, driver: PoseTrack, config: FootLockConfig = FootLockConfig()) -> PoseTrack:
+def lock_feet(track: PoseTrack, driver: PoseTrack, config: FootLockConfig = DEFAULT_FOOT_LOCK) -> PoseTrack:
     """``foot_lock`` of a retargeted track with the contacts of the driver it was made from.
 
     Args:

@@ -8,14 +8,22 @@ every result with them. numpy only: the numpy backend stays torch-free.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from pose_io.feet import FootLockConfig, foot_lock, track_contacts
+from pose_io.feet import DEFAULT_FOOT_LOCK, FootLockConfig, foot_lock, track_contacts
 from pose_io.track import PoseTrack
 from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
 
 LAYOUT = "body15"  # what the network reads and writes
+
+
+@dataclass(frozen=True, eq=False)
+class LockedMotion(PreparedMotion):
+    """A prepared driver that also keeps its foot contacts ([T, 2] bool, ``ANKLES`` order)."""
+
+    contacts: np.ndarray | None = None
 
 
 class FootLockedRetargeter:
@@ -26,25 +34,20 @@ class FootLockedRetargeter:
         config: contact test and cleanup settings.
     """
 
-    def __init__(self, inner: RetargeterBase, config: FootLockConfig = FootLockConfig()) -> None:
+    def __init__(self, inner: RetargeterBase, config: FootLockConfig = DEFAULT_FOOT_LOCK) -> None:
         self.inner = inner
         self.config = config
-        self._contacts: dict[int, np.ndarray] = {}  # id(prepared motion) -> [T, 2] bool, until retargeted
 
-    def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> PreparedMotion:
-        """The network input of ``motion`` (``inner``'s), its foot contacts kept for its result."""
+    def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> LockedMotion:
+        """The network input of ``motion`` (``inner``'s) with its foot contacts."""
         prepared = self.inner.prepare_motion(motion, name)
         body = motion if motion.layout == LAYOUT else motion.to_layout(LAYOUT)
-        self._contacts[id(prepared)] = track_contacts(body, self.config)
-        return prepared
+        return LockedMotion(prepared.x, prepared.fps, prepared.name, track_contacts(body, self.config))
 
-    def retarget_prepared(self, motions: Sequence[PreparedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
+    def retarget_prepared(self, motions: Sequence[LockedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
         """``inner``'s results for motions prepared by this wrapper, each cleaned with its driver's contacts."""
         results = self.inner.retarget_prepared(motions, reference)
-        return [
-            r.replace(joints=foot_lock(r.joints, self._contacts.pop(id(m)), r.layout, self.config))
-            for r, m in zip(results, motions)
-        ]
+        return [r.replace(joints=foot_lock(r.joints, m.contacts, r.layout, self.config)) for r, m in zip(results, motions)]
 
     def retarget(self, motion: PoseTrack, reference: ReferenceCodes, *, name: str = "motion track") -> PoseTrack:
         """``inner.retarget`` of one track, foot-locked."""
