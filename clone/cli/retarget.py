@@ -222,6 +222,14 @@ def train(
         float, typer.Option("--extra-spread", min=0.1, max=4.0, help="Factor on the body-proportion spread of the "
                             "extra characters (1: like the world's).")
     ] = 1.0,
+    max_pitch: Annotated[
+        float, typer.Option("--max-pitch", help="Training cameras' pitch is drawn in +-this many degrees (the "
+                            "world's: 10).")
+    ] = 10.0,
+    perspective: Annotated[
+        float, typer.Option("--perspective", help="Share of training cameras that see in perspective from 2-8 m "
+                            "(0: all weak-perspective, like the world's).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -247,6 +255,7 @@ def train(
     from retarget.losses import ablation_config
     from retarget.train import TrainConfig, TrainProgress
     from retarget.train import train as run_training
+    from retarget.world import CameraSpread
 
     check_output(out, "--out", overwrite=True)  # rewritten after every epoch; --resume continues it
     if out.exists() and not resume:
@@ -258,6 +267,8 @@ def train(
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--extra-characters", extra_characters, 0, MAX_EXTRA_CHARACTERS)
     check_number("--extra-spread", extra_spread, 0.1, 4.0)
+    check_number("--max-pitch", max_pitch, 0, 60)
+    check_number("--perspective", perspective, 0, 1)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -267,7 +278,8 @@ def train(
             cycle_weight=cycle_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
-                             extra_characters=extra_characters, extra_spread=extra_spread)
+                             extra_characters=extra_characters, extra_spread=extra_spread,
+                             cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective))
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

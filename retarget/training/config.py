@@ -10,6 +10,7 @@ from retarget.augment import AugmentConfig
 from retarget.losses import LossConfig
 from retarget.model import variant_config
 from retarget.preprocess import PreprocessConfig
+from retarget.world.camera import CameraSpread
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,8 @@ class TrainConfig:
         augment: augmentation settings.
         loss: objective settings (see :data:`retarget.losses.ABLATIONS`).
         preprocess: canvas and smoothing used at inference (stored in the checkpoint).
+        cameras: how the camera of a training window is drawn (pitch range, share of perspective cameras
+            and their distances); validation keeps the world's cameras.
         body_normalise: bring every character to one skeleton height in training, and every track to it at
             inference, instead of scaling by the image height (the target height is that of the initial
             weights' mean pose, or the median character's; stored in the checkpoint's preprocessing).
@@ -52,6 +55,7 @@ class TrainConfig:
     augment: AugmentConfig = field(default_factory=AugmentConfig)
     loss: LossConfig = field(default_factory=LossConfig)
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    cameras: CameraSpread = field(default_factory=CameraSpread)
     body_normalise: bool = True
     extra_characters: int = 0
     extra_spread: float = 1.0
@@ -75,7 +79,9 @@ class TrainConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
         """Inverse of :meth:`to_dict`."""
-        nested = {"augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig}
+        nested = {
+            "augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig, "cameras": CameraSpread,
+        }
         values = dict(data)
         for key, kind in nested.items():
             if key in values:

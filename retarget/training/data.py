@@ -25,6 +25,7 @@ from retarget.preprocess import (
     row_statistics,
 )
 from retarget.training.config import TrainConfig
+from retarget.world.camera import WORLD_CAMERAS, CameraSpread
 
 log = logging.getLogger(__name__)
 
@@ -38,7 +39,7 @@ class WorldSplit(Protocol):
 
     def window(
         self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
-        rng: np.random.Generator | None = None,
+        rng: np.random.Generator | None = None, *, cameras: CameraSpread = WORLD_CAMERAS,
     ) -> np.ndarray: ...
 
 
@@ -57,10 +58,15 @@ class CrossSamples(Dataset):
         size: samples per epoch.
         seed: seed.
         scales: optional [C] factor per character (body-height normalisation), applied about the origin.
+        cameras: how each view slot's camera is drawn (default: the world's own). With another spread and
+            ``scales``, a window is brought to ``height`` by its own skeleton height instead, as inference
+            brings a track: a steep or near camera changes how tall a character looks.
+        height: the skeleton height (canvas pixels) ``scales`` bring characters to.
     """
 
     def __init__(
-        self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None
+        self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None,
+        cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None,
     ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
@@ -70,6 +76,11 @@ class CrossSamples(Dataset):
         self.size = size
         self.seed = seed
         self.scales = scales
+        self.cameras = cameras
+        self.own_height = cameras != WORLD_CAMERAS and scales is not None
+        if self.own_height and not (height is not None and height > 0):
+            raise ValueError("a camera spread with body scales needs the target height")
+        self.height = height
         self.epoch = 0
         self.vary_character = config.body_channels is not None and split.num_characters > 1
         self.vary_view = config.view_channels is not None and split.num_views > 1
@@ -94,8 +105,12 @@ class CrossSamples(Dataset):
             key = (int(motions[m]), int(chars[c]), int(views[v]))
             if key not in cache:
                 camera = np.random.default_rng(int(view_seeds[v]))
-                window = self.split.window(*key, length=self.length, offset=0, rng=camera)
-                if self.scales is not None:
+                # Only a non-default spread is passed: any WorldSplit (and test doubles) takes the default.
+                extra = {} if self.cameras == WORLD_CAMERAS else {"cameras": self.cameras}
+                window = self.split.window(*key, length=self.length, offset=0, rng=camera, **extra)
+                if self.own_height:
+                    window = window * (self.height / skeleton_heights(window[None], LAYOUT)[0])
+                elif self.scales is not None:
                     window = window * self.scales[key[1]]
                 cache[key] = np.asarray(window, np.float32)
             windows.append(cache[key])

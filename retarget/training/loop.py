@@ -183,7 +183,9 @@ def fit(
     history: list[dict[str, float]] = list(done.get("history", []))
 
     size = config.samples_per_epoch
-    dataset = CrossSamples(train_split, config.window, config.variant, size, config.seed, scales)
+    dataset = CrossSamples(
+        train_split, config.window, config.variant, size, config.seed, scales, config.cameras, preprocess.body_height
+    )
     steps_per_epoch = max(1, size // config.batch_size)
     val = None
     if val_split is not None and world.is_main:

@@ -5,7 +5,7 @@ Numpy only (no torch): ``retarget`` training code turns the arrays into tensors 
 - ``load_motion``: BVH / AMC of known rigs -> ``Motion3D`` on the canonical 18-joint skeleton.
 - ``mocap``: the BVH and ASF/AMC readers and forward kinematics ``load_motion`` builds on.
 - ``Skeleton``, ``sample_skeleton``, ``NAMED_CHARACTERS``, ``skeleton_of``, ``retarget_3d``: characters.
-- ``Camera``, ``frame_camera``, ``facing_angle``, ``project``, ``VIEW_YAWS``: views and the framing rule.
+- ``Camera``, ``CameraSpread`` (random training cameras), ``frame_camera``, ``facing_angle``, ``project``, ``VIEW_YAWS``: views and the framing rule.
 - ``MotionWorld``: the cached dataset of labelled (motion, character, view) windows.
 """
 
@@ -14,6 +14,7 @@ from retarget.world.camera import (
     MAX_PITCH,
     VIEW_YAWS,
     Camera,
+    CameraSpread,
     facing_angle,
     frame_camera,
     ground_origin,
@@ -42,6 +43,7 @@ __all__ = [
     "VIEW_YAWS",
     "WORLD_JOINTS",
     "Camera",
+    "CameraSpread",
     "Motion3D",
     "MotionWorld",
     "Skeleton",

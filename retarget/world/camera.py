@@ -32,6 +32,8 @@ CANVAS_SIZE = (512, 512)
 # Discrete views for the triplet loss: 13 yaw bins of 15 degrees from -90 to +90.
 VIEW_YAWS: tuple[float, ...] = tuple(float(v) for v in range(-90, 91, 15))
 MAX_PITCH = 10.0
+# Perspective cameras aim at this height (metres) above the ground under the clip's first root.
+AIM_HEIGHT = 1.0
 
 
 @dataclass(frozen=True)
@@ -57,6 +59,76 @@ class Camera:
     def rotation(self, facing_deg: float = 0.0) -> np.ndarray:
         """[3, 3] world -> camera rotation: ``Rz(roll) @ Rx(pitch) @ Ry(-(yaw + facing))``."""
         return view_rotation(self.yaw_deg + facing_deg, self.pitch_deg, self.roll_deg)
+
+
+@dataclass(frozen=True)
+class CameraSpread:
+    """How the random camera of a window is drawn (defaults: the world's own, pitch only).
+
+    Real videos are shot from above or below and from a few metres away, so a near body part looks bigger
+    than a far one; the world's cameras are weak-perspective and nearly level. Training can widen both.
+
+    Attributes:
+        max_pitch: pitch uniform in +-``max_pitch`` degrees.
+        perspective: share of cameras at a finite distance (perspective); the others are weak-perspective.
+        near: closest distance (metres) of a perspective camera from the nearest joint of its window.
+        far: farthest such distance; uniform in [near, far].
+    """
+
+    max_pitch: float = MAX_PITCH
+    perspective: float = 0.0
+    near: float = 2.0
+    far: float = 8.0
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.max_pitch < 90:
+            raise ValueError("max_pitch must be in [0, 90) degrees")
+        if not 0 <= self.perspective <= 1:
+            raise ValueError("perspective must be a share in [0, 1]")
+        if not 0.5 <= self.near <= self.far <= 1000:
+            raise ValueError("camera distances must be 0.5 <= near <= far <= 1000 metres")
+
+    def draw(self, rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """[count] pitches (degrees) and [count] distances (metres; inf = weak perspective).
+
+        With ``perspective`` 0 only the pitches are drawn, so the default consumes ``rng`` exactly as the
+        world's cameras always have.
+        """
+        pitch = rng.uniform(-self.max_pitch, self.max_pitch, size=count)
+        distance = np.full(count, np.inf)
+        if self.perspective > 0:
+            near = rng.random(count) < self.perspective
+            drawn = rng.uniform(self.near, self.far, size=count)
+            distance[near] = drawn[near]
+        return pitch, distance
+
+
+WORLD_CAMERAS = CameraSpread()
+
+
+def perspective_xy(cam: np.ndarray, aim: np.ndarray, distance: np.ndarray) -> np.ndarray:
+    """Camera-frame points seen in perspective: [B, L, J, 3] metres -> [B, L, J, 2] metres (x, y up).
+
+    Each window's camera looks at its ``aim`` point; a point at the aim's depth keeps its weak-perspective
+    position, nearer points are magnified and farther ones shrunk. ``distance`` is how far the camera is
+    from the window's nearest point (so a clip walking towards the camera never reaches it); inf gives the
+    weak-perspective projection unchanged.
+
+    Args:
+        cam: [B, L, J, 3] rotated points, +z towards the camera.
+        aim: [B, 3] the rotated aim point of each window.
+        distance: [B] metres (inf = weak perspective).
+    """
+    rel = cam - aim[:, None, None, :]  # [B, L, J, 3]
+    out = cam[..., :2].copy()
+    finite = np.isfinite(distance)
+    if finite.any():
+        r = rel[finite]
+        nearest = np.maximum(r[..., 2].reshape(len(r), -1).max(axis=1), 0.0)  # [b] metres in front of the aim
+        d = (np.asarray(distance, np.float64)[finite] + nearest)[:, None, None]  # camera to aim depth
+        factor = d / (d - r[..., 2])  # [b, L, J], >= 1 for points nearer than the aim
+        out[finite] = aim[finite][:, None, None, :2] + r[..., :2] * factor[..., None]
+    return out
 
 
 def view_rotation(yaw_deg: float, pitch_deg: float = 0.0, roll_deg: float = 0.0) -> np.ndarray:

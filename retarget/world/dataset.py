@@ -32,12 +32,16 @@ from pose_io.atomic import atomic_dir
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
 from retarget.world.camera import (
+    AIM_HEIGHT,
     CANVAS_SIZE,
     MAX_PITCH,
     VIEW_YAWS,
+    WORLD_CAMERAS,
     Camera,
+    CameraSpread,
     facing_angles,
     frame_camera,
+    perspective_xy,
     view_rotations,
 )
 from retarget.world.rigs import load_motion, motion_name
@@ -316,6 +320,7 @@ class WorldSplit:
         offset: int = 0,
         rng: np.random.Generator | None = None,
         pitch_deg: float | None = None,
+        cameras: CameraSpread = WORLD_CAMERAS,
     ) -> np.ndarray:
         """[length, 15, 2] float32 body15 pixels (x right, y down) of a window on a character from a view.
 
@@ -328,11 +333,12 @@ class WorldSplit:
             view: view bin (index into ``views``).
             length: frames (default the world's window).
             offset: frames after the window's start.
-            rng: draws the pitch uniformly in +-``MAX_PITCH`` degrees; None: pitch 0.
+            rng: draws the camera from ``cameras``; None: pitch 0.
             pitch_deg: an explicit pitch (overrides ``rng``).
+            cameras: how ``rng`` draws the camera (default: the world's, pitch in +-``MAX_PITCH`` degrees).
         """
         pitch = None if pitch_deg is None else [pitch_deg]
-        return self.windows([motion], [character], [view], length, rng, offset, pitch)[0]
+        return self.windows([motion], [character], [view], length, rng, offset, pitch, cameras)[0]
 
     def windows(
         self,
@@ -343,15 +349,17 @@ class WorldSplit:
         rng: np.random.Generator | None = None,
         offset: int = 0,
         pitch_deg: Sequence[float] | None = None,
+        cameras: CameraSpread = WORLD_CAMERAS,
     ) -> np.ndarray:
         """[B, length, 15, 2] float32: ``window`` for B (motion, character, view) triples at once.
 
         Args:
             motions, characters, views: [B] indices.
             length: frames (default the world's window).
-            rng: draws each pitch uniformly in +-``MAX_PITCH``; None: pitch 0.
+            rng: draws each camera from ``cameras``; None: pitch 0.
             offset: frames after each window's start.
             pitch_deg: [B] explicit pitches (override ``rng``).
+            cameras: how ``rng`` draws cameras (default: the world's, pitch in +-``MAX_PITCH``).
         """
         if not len(motions) == len(characters) == len(views):
             raise ValueError("motions, characters and views must have the same length")
@@ -359,7 +367,7 @@ class WorldSplit:
         if ((views_a < 0) | (views_a >= self.num_views)).any():
             raise IndexError(f"views must be in 0..{self.num_views - 1}")
         pos = np.stack([self.window3d(m, c, length, offset) for m, c in zip(motions, characters)])  # [B, L, 18, 3]
-        return self.project(pos, views_a, rng, pitch_deg)
+        return self.project(pos, views_a, rng, pitch_deg, cameras)
 
     def project(
         self,
@@ -367,6 +375,7 @@ class WorldSplit:
         views: Sequence[int] | np.ndarray,
         rng: np.random.Generator | None = None,
         pitch_deg: Sequence[float] | None = None,
+        cameras: CameraSpread = WORLD_CAMERAS,
     ) -> np.ndarray:
         """[B, L, 18, 3] world joints (as ``window3d`` gives them) -> [B, L, 15, 2] float32 body15 pixels.
 
@@ -376,22 +385,29 @@ class WorldSplit:
         Args:
             pos: [B, L, 18, 3] metres, first root over the origin, ground at y = 0.
             views: [B] view bins.
-            rng: draws each pitch uniformly in +-``MAX_PITCH``; None: pitch 0.
-            pitch_deg: [B] explicit pitches (override ``rng``).
+            rng: draws each camera from ``cameras`` (pitch, and distance when it has perspective); None:
+                pitch 0, weak perspective.
+            pitch_deg: [B] explicit pitches (override ``rng``'s; weak perspective).
+            cameras: how ``rng`` draws the cameras (default: the world's, pitch in +-``MAX_PITCH``).
         """
         b = len(pos)
         views_a = np.asarray(views, dtype=np.int64)
+        distance = np.full(b, np.inf)
         if pitch_deg is not None:
             pitch = np.asarray(pitch_deg, dtype=np.float64).reshape(b)
         elif rng is not None:
-            pitch = rng.uniform(-MAX_PITCH, MAX_PITCH, size=b)
+            pitch, distance = cameras.draw(rng, b)
         else:
             pitch = np.zeros(b)
         yaw = np.asarray(self.views, dtype=np.float64)[views_a] + facing_angles(pos)
         rot = view_rotations(yaw, pitch)  # [B, 3, 3]
-        rot = rot[:, None, None, :2, :].astype(np.float32)  # [B, 1, 1, 2, 3]: only camera x and y are needed
         pts = pos[:, :, _BODY15_IDX, None, :]  # [B, L, 15, 1, 3]
-        cam = (rot * pts).sum(axis=-1)  # [B, L, 15, 2] camera x, y (metres, y up)
+        if np.isfinite(distance).any():
+            cam3 = (rot[:, None, None].astype(np.float32) * pts).sum(axis=-1)  # [B, L, 15, 3]
+            aim = rot @ np.array([0.0, AIM_HEIGHT, 0.0])  # [B, 3]
+            cam = perspective_xy(cam3, aim, distance).astype(np.float32)
+        else:  # only camera x and y are needed
+            cam = (rot[:, None, None, :2, :].astype(np.float32) * pts).sum(axis=-1)  # [B, L, 15, 2] metres, y up
         ref = frame_camera(0.0, 0.0, self.canvas_size)
         cam *= np.float32(ref.scale)
         cam[..., 0] += np.float32(ref.tx)

@@ -268,3 +268,50 @@ def test_progress_is_a_callback_of_every_step_and_epoch(tmp_path):
     assert [p.global_step for p in steps] == [1, 2, 3, 4]
     assert [(p.epoch, p.step, p.steps_per_epoch) for p in ends] == [(1, 2, 2), (2, 2, 2)]
     assert "val_total" in ends[-1].losses and "total" in steps[0].losses
+
+
+class CameraSplit(FakeSplit):
+    """A FakeSplit that takes a camera spread: its pitch range widens the yaw tilt and perspective shrinks the
+    figure, as a steep or near camera changes how tall a person looks."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen: list = []
+
+    def window(self, motion, character, view, length=64, offset=0, rng=None, *, cameras=None):
+        self.seen.append(cameras)
+        out = super().window(motion, character, view, length, offset, rng)
+        shrink = 0.6 if cameras is not None and cameras.perspective > 0 else 1.0
+        return (out * shrink).astype(np.float32)
+
+
+def test_a_camera_spread_reaches_the_split_and_windows_keep_the_height():
+    from pose_io.measures import skeleton_heights
+    from retarget.world import CameraSpread
+
+    split = CameraSplit()
+    scales = body_scales(split, TINY, target=100.0)
+    split.seen.clear()
+    spread = CameraSpread(max_pitch=30.0, perspective=1.0)
+    samples = CrossSamples(split, 64, "full", 4, seed=0, scales=scales, cameras=spread, height=100.0)
+    windows = samples.sample(0, 0)["windows"]
+    assert split.seen and all(c == spread for c in split.seen)
+    # Each window brought to the target height by its own skeleton height, as inference brings a track.
+    np.testing.assert_allclose(skeleton_heights(windows), 100.0, rtol=1e-4)
+    # The world's cameras: the split is called as before and the characters' own scales apply.
+    split.seen.clear()
+    plain = CrossSamples(split, 64, "full", 4, seed=0, scales=scales).sample(0, 0)["windows"]
+    assert split.seen == [None] * len(split.seen)
+    assert np.ptp(skeleton_heights(plain)) > 0.01  # per character, not per window
+    with pytest.raises(ValueError, match="target height"):
+        CrossSamples(split, 64, "full", 4, seed=0, scales=scales, cameras=spread)
+
+
+def test_config_keeps_its_camera_spread_and_old_configs_get_the_worlds():
+    from retarget.world import CameraSpread
+
+    config = TrainConfig(cameras=CameraSpread(max_pitch=25.0, perspective=0.5))
+    assert TrainConfig.from_dict(config.to_dict()) == config
+    old = TrainConfig().to_dict()
+    del old["cameras"]
+    assert TrainConfig.from_dict(old).cameras == CameraSpread()

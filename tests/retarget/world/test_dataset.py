@@ -12,7 +12,15 @@ from typer.testing import CliRunner
 
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
-from retarget.world import NAMED_CHARACTERS, WORLD_JOINTS, MotionWorld, facing_angle, project
+from retarget.world import (
+    MAX_PITCH,
+    NAMED_CHARACTERS,
+    WORLD_JOINTS,
+    CameraSpread,
+    MotionWorld,
+    facing_angle,
+    project,
+)
 from retarget.world import dataset as dataset_module
 from retarget.world.dataset import assign_splits, motion_group, window_starts
 from tests.retarget.world.humanoid import write_clip
@@ -203,3 +211,48 @@ def test_cli_world_build(tiny_mocap: Path, tmp_path: Path) -> None:
     assert any((tmp_path / "cache").glob("world-*/meta.json"))
     result = runner.invoke(app, ["world", "build", "--mocap", str(tmp_path / "missing")])
     assert result.exit_code == 2 and "error:" in result.output
+
+
+def test_default_camera_spread_draws_as_the_world_always_has(tiny_world: MotionWorld) -> None:
+    split = tiny_world.split("train")
+    jittered = split.window(0, 0, 6, rng=np.random.default_rng(5))
+    by_pitch = split.window(0, 0, 6, pitch_deg=float(np.random.default_rng(5).uniform(-MAX_PITCH, MAX_PITCH)))
+    np.testing.assert_array_equal(jittered, by_pitch)
+    np.testing.assert_array_equal(jittered, split.window(0, 0, 6, rng=np.random.default_rng(5), cameras=CameraSpread()))
+
+
+def test_wider_pitch_and_perspective_cameras(tiny_world: MotionWorld) -> None:
+    split = tiny_world.split("train")
+    steep = CameraSpread(max_pitch=40.0)
+    pitches = [steep.draw(np.random.default_rng(s), 1)[0][0] for s in range(200)]
+    assert max(np.abs(pitches)) > 30 and max(np.abs(pitches)) <= 40
+    near = CameraSpread(perspective=1.0, near=2.0, far=2.0)
+    pitch, distance = near.draw(np.random.default_rng(1), 4)
+    np.testing.assert_array_equal(distance, 2.0)
+    weak = split.window(0, 0, 6, pitch_deg=float(pitch[0]))
+    seen = split.window(0, 0, 6, rng=np.random.default_rng(1), cameras=near)
+    assert seen.shape == weak.shape and seen.dtype == np.float32 and np.isfinite(seen).all()
+    # Seen from 2 m in front of the face (yaw 0, pitch ~0 here), the head comes out bigger than the feet: the
+    # nose-neck segment grows against the weak-perspective view, the shins shrink.
+    flat = CameraSpread(max_pitch=0.0, perspective=1.0, near=2.0, far=2.0)
+    close = split.window(0, 0, split.views.index(0.0), rng=np.random.default_rng(0), cameras=flat)
+    far = split.window(0, 0, split.views.index(0.0), pitch_deg=0.0)
+    head = (BODY15.index("nose"), BODY15.index("neck"))
+    shin = (BODY15.index("l_knee"), BODY15.index("l_ankle"))
+
+    def seg(w: np.ndarray, pair: tuple[int, int]) -> float:
+        return float(np.median(np.linalg.norm(w[:, pair[0]] - w[:, pair[1]], axis=-1)))
+
+    assert seg(close, head) / seg(far, head) > seg(close, shin) / seg(far, shin) * 1.05
+    # The aim point keeps its weak-perspective place: far cameras converge to the world's projection.
+    distant = CameraSpread(max_pitch=0.0, perspective=1.0, near=900.0, far=900.0)
+    np.testing.assert_allclose(
+        split.window(0, 0, 6, rng=np.random.default_rng(0), cameras=distant), split.window(0, 0, 6, pitch_deg=0.0),
+        atol=0.5,
+    )
+
+
+@pytest.mark.parametrize("bad", [{"max_pitch": 90.0}, {"perspective": 1.5}, {"near": 0.1}, {"near": 9.0, "far": 3.0}])
+def test_camera_spread_rejects_bad_settings(bad: dict) -> None:
+    with pytest.raises(ValueError):
+        CameraSpread(**bad)
