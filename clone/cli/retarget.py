@@ -332,6 +332,10 @@ def evaluate(
     pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the cases.")] = 0,
+    noise: Annotated[
+        float, typer.Option("--noise", help="Detector noise on the inputs: Gaussian, std as a fraction of the "
+                            "person's height (real OpenPose tracks: about 0.002-0.006).")
+    ] = 0.0,
     split: Annotated[Split, typer.Option("--split", parser=Split, help="World split to measure on.")] = Split.TEST,
     world_seed: Annotated[
         int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
@@ -355,6 +359,7 @@ def evaluate(
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
     check_number("--pairs", pairs, 1, MAX_PAIRS)
     check_number("--length", length, 16, MAX_LENGTH)
+    check_number("--noise", noise, 0, 0.1)
     check_number("--threads", threads, 1, MAX_THREADS)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
@@ -376,7 +381,7 @@ def evaluate(
         task = bar.add_task("eval", total=None)
         doc, table = run_eval(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
-            config=EvalConfig(pairs=pairs, length=length, seed=seed), fps=world.config.fps, device=device,
+            config=EvalConfig(pairs=pairs, length=length, seed=seed, noise=noise), fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )

@@ -125,9 +125,12 @@ def sample_cases(
 
 def _score_case(
     case: Case, split: WorldSplit, source: WorldSplit | ClipMotions, methods: Mapping[str, Method],
-    config: EvalConfig, fps: float,
+    config: EvalConfig, fps: float, noise: np.random.Generator,
 ) -> dict[str, CaseScores]:  # fmt: skip
-    """Row -> :func:`case_scores` of one case, for every method and then every 3D reference."""
+    """Row -> :func:`case_scores` of one case, for every method and then every 3D reference.
+
+    ``noise`` draws the detector noise of the method inputs (``config.noise``).
+    """
     skel_a, skel_b = split.characters[case.source_character], split.characters[case.character]
     pos_a = source.window3d(case.motion, case.source_character, config.length)  # [L, 18, 3]
     pos_b = source.window3d(case.motion, case.character, config.length)
@@ -138,7 +141,11 @@ def _score_case(
     seen = split.project(np.stack([pos_b, *built]), [case.view] * (1 + len(built)),
                          pitch_deg=[case.pitch] * (1 + len(built)))  # fmt: skip  # [1 + R, L, 15, 2]
     truth = seen[0]
-    height = skel_b.height * split.camera(case.view).scale  # pixels
+    scale = split.camera(case.view).scale  # pixels per metre, the same for every view
+    height = skel_b.height * scale  # pixels
+    if config.noise > 0:
+        motion2d = motion2d + noise.normal(0.0, config.noise * skel_a.height * scale, motion2d.shape)
+        reference2d = reference2d + noise.normal(0.0, config.noise * height, reference2d.shape)
     size = tuple(split.canvas_size)
     motion_track = body15_track(motion2d, fps, size)
     reference_track = body15_track(reference2d, fps, size)
@@ -174,7 +181,8 @@ def evaluate(
     cases = sample_cases(source, split, config, np.random.default_rng(config.seed))
     rows: dict[str, list[CaseScores]] = {name: [] for name in [*methods, *REFERENCE_FUNCTIONS]}
     for k, case in enumerate(cases):
-        for name, scores in _score_case(case, split, source, methods, config, fps).items():
+        noise = np.random.default_rng([config.seed, 104723, k])
+        for name, scores in _score_case(case, split, source, methods, config, fps, noise).items():
             rows[name].append(scores)
         if progress is not None:
             progress(k + 1, len(cases))

@@ -53,7 +53,10 @@ def report_notes(doc: Mapping) -> list[str]:
         (f"Cases: {cfg['pairs']} per source, seed {cfg['seed']}: the motion of a window performed by character A "
          f"seen by camera A, moved onto character B (≠ A) seen by camera B (13 view bins, pitch uniform in "
          f"±{cfg['max_pitch']:g}°). Truth: the same 3D motion replayed on B's skeleton (bone directions kept, root "
-         "path scaled by the leg ratio, feet on the ground) and projected by camera B."),
+         "path scaled by the leg ratio, feet on the ground) and projected by camera B."
+         + (f" Detector noise: every joint of the driver and reference the methods see moved by Gaussian noise of "
+            f"std {cfg['noise']:g} of that person's height (the truth and the 3D references stay clean)."
+            if cfg.get("noise", 0) > 0 else "")),
         (f"Reference: a {cfg['reference_length']}-frame window of another motion performed by B and seen by camera "
          "B. Networks take B's skeleton and view codes and the placement from it, the 2D baselines their scale "
          "statistics. The 3D references see the true 3D motion and camera instead."),

@@ -36,3 +36,29 @@ def test_extra_clips_replay_like_the_world(cache: Path, tiny_mocap: Path) -> Non
         assert np.allclose(clips.window3d(m, 2), split.window3d(m, 2), atol=1e-5)
     with pytest.raises(InputError, match="shorter"):
         ClipMotions([motion], split.characters, 512, 32)
+
+
+def test_detector_noise_reaches_the_methods_only(cache: Path, tiny_mocap: Path) -> None:
+    from retarget.evaluate import evaluate
+
+    split = MotionWorld.build(tiny_mocap, cache).split("test")
+    seen: list[np.ndarray] = []
+
+    def copy(motion, reference):  # the driver unchanged: its error is the inputs' noise plus retargeting's
+        seen.append(np.asarray(motion.joints, np.float64))
+        return motion
+
+    clean = evaluate(split, {"copy": copy}, EvalConfig(pairs=6))
+    noisy = evaluate(split, {"copy": copy}, EvalConfig(pairs=6, noise=0.01))
+    again = evaluate(split, {"copy": copy}, EvalConfig(pairs=6, noise=0.01))
+    assert noisy == again  # seeded
+    assert noisy["copy"]["pose"]["mse_x1e3"] > clean["copy"]["pose"]["mse_x1e3"]
+    for name in noisy:
+        if name != "copy":  # the 3D references see the truth, never the noisy inputs
+            assert noisy[name] == clean[name]
+    # The noise is about 1 % of the height per coordinate.
+    diff = seen[6] - seen[0]  # case 0 with and without noise
+    height = split.characters[0].height * split.camera(0).scale
+    assert 0.3 < float(np.nanstd(diff)) / (0.01 * height) < 3.0
+    with pytest.raises(ValueError, match="noise"):
+        EvalConfig(noise=0.5)
