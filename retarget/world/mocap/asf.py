@@ -236,7 +236,10 @@ def read_asf(path: str | Path) -> AsfSkeleton:
     for j, name in enumerate(names):
         if name in bones:
             b = bones[name]
-            vectors[j] = b.direction * b.length
+            with np.errstate(over="ignore", invalid="ignore"):
+                vectors[j] = b.direction * b.length
+            if not np.isfinite(vectors[j]).all():
+                raise InputError(f"{src}: bone {name}: direction x length is out of range")
             axes_c[j] = acclaim_rotation(_degrees(b.axis, in_degrees), b.axis_order)
     axes_c[0] = acclaim_rotation(_degrees(root.orientation, in_degrees), root.axis)
     return AsfSkeleton(names, parents, bones, root, in_degrees, vectors, axes_c)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -95,6 +96,12 @@ def test_tiny_skeleton_errors(tmp_path: Path) -> None:
     asf.write_text(TINY_ASF.format(unit="deg").replace("thigh shin", "thigh knee"))
     with pytest.raises(InputError, match="unknown bone 'knee'"):
         read_asf_amc(asf, amc)
+    # Each number finite, their product not: one error line, no overflow warning.
+    asf.write_text(TINY_ASF.format(unit="deg").replace("direction 0 -1 0\n     length 3", "direction 0 -1e300 0\n     length 1e300"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match="bone shin: direction x length is out of range"):
+            read_asf_amc(asf, amc)
 
 
 def test_amc_matches_the_cgspeed_bvh_of_the_same_take(shared_dir: Path) -> None:
