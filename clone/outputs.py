@@ -8,27 +8,19 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
+from pose_io.atomic import nearest_existing
 from pose_io.errors import InputError
 
 FOLDER = ""  # the "suffix" of a folder output in ``suffixes``
 
 
-def _nearest_existing(path: Path) -> Path:
-    """``path`` or its nearest existing ancestor (the folder that the writer's ``mkdir(parents=True)`` starts in)."""
-    path = path.absolute()
-    while not path.exists() and path != path.parent:
-        path = path.parent
-    return path
-
-
 def check_writable_folder(folder: Path, what: str) -> None:
     """Raise InputError unless new files can be created in ``folder`` (or in the folders it would be made in)."""
-    base = _nearest_existing(folder)
+    base = nearest_existing(folder)
     if not base.is_dir():
         raise InputError(f"{what}: {base} is not a folder")
     # os.access says yes to root on a read-only mount, so a probe file settles it (and is removed at once).
@@ -101,11 +93,3 @@ def check_number(option: str, value: float | None, low: float | None = None, hig
         raise InputError(f"{option}: must be {' and '.join(p for p in (lo, hi) if p)}, got {value:g}")
 
 
-def check_free_space(folder: Path, nbytes: int, what: str) -> None:
-    """Raise InputError when ``folder``'s file system has less than ``nbytes`` (+10 %, +256 MiB) free."""
-    base = _nearest_existing(Path(folder))
-    free = shutil.disk_usage(base).free
-    need = int(nbytes * 1.1) + (256 << 20)
-    if free < need:
-        raise InputError(f"{what} needs {need / 2**30:.1f} GiB in {base}, which has {free / 2**30:.1f} GiB free; "
-                         "use a smaller --size, fewer frames, or point TMPDIR at a bigger disk")

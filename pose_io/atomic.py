@@ -35,6 +35,30 @@ def _umask(probe_dir: Path) -> int:
         probe.unlink()
 
 
+def nearest_existing(path: Path) -> Path:
+    """``path`` or its nearest existing ancestor (the folder that the writer's ``mkdir(parents=True)`` starts in)."""
+    path = Path(path).absolute()
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+DISK_HINT = "use a smaller --size, fewer frames, or point TMPDIR at a bigger disk"
+
+
+def check_free_space(folder: Path, nbytes: int, what: str, hint: str = DISK_HINT) -> None:
+    """Raise InputError when ``folder``'s file system has less than ``nbytes`` (+10 %, +256 MiB) free.
+
+    The one check before anything a user's option scales is allocated on disk; ``hint`` says what to change.
+    """
+    base = nearest_existing(Path(folder))
+    free = shutil.disk_usage(base).free
+    need = int(nbytes * 1.1) + (256 << 20)
+    if free < need:
+        raise InputError(f"{what} needs {need / 2**30:.1f} GiB in {base}, which has {free / 2**30:.1f} GiB free; "
+                         f"{hint}")
+
+
 def check_new_output(path: Path, overwrite: bool = False) -> None:
     """Raise InputError when ``path`` exists and ``overwrite`` is not set."""
     if path.exists() and not overwrite:

@@ -119,7 +119,7 @@ def frame_store(count: int, size: int) -> Iterator[np.ndarray]:
     if nbytes <= _IN_MEMORY_BYTES:
         yield np.zeros((count, size, size, 3), dtype=np.uint8)
         return
-    from clone.outputs import check_free_space
+    from pose_io.atomic import check_free_space
 
     # A frame cache that does not fit would fill the shared disk and end in SIGBUS half-way through reading.
     check_free_space(Path(tempfile.gettempdir()), nbytes, f"a frame cache of {count} frames at {size}x{size}")

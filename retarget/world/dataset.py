@@ -19,7 +19,6 @@ import hashlib
 import json
 import logging
 import re
-import shutil
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -28,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pose_io.atomic import atomic_dir
+from pose_io.atomic import atomic_dir, check_free_space
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
 from retarget.world.camera import (
@@ -536,9 +535,8 @@ def _check_space(out: Path, characters: dict[str, list[Skeleton]], split_of: Seq
         (len(characters[split]) + 1) * sum(f for f, s in zip(frames, split_of) if s == split) * len(WORLD_JOINTS) * 12
         for split in SPLITS
     )
-    free = shutil.disk_usage(out).free
-    if need * 1.1 + 2**27 > free:
-        raise InputError(f"{out}: the motion world needs {need / 2**30:.1f} GB, {free / 2**30:.1f} GB are free")
+    check_free_space(out, need, "the motion world",
+                     "choose a --cache folder on a bigger disk, or fewer --extra-characters")
 
 
 def _write_world(

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from clone.outputs import FOLDER, check_free_space, check_number, check_output
+from clone.outputs import FOLDER, check_number, check_output
+from pose_io.atomic import check_free_space
 from pose_io.errors import InputError
 
 

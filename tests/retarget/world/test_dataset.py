@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from pose_io import atomic
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
 from retarget.world import (
@@ -163,8 +164,8 @@ def test_extra_characters_join_training_only(tiny_mocap: Path, tiny_world: Motio
 def test_world_build_refuses_what_the_disk_cannot_hold(
     tiny_mocap: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(dataset_module.shutil, "disk_usage", lambda path: type("U", (), {"free": 2**20})())
-    with pytest.raises(InputError, match="needs .* GB"):
+    monkeypatch.setattr(atomic.shutil, "disk_usage", lambda path: type("U", (), {"free": 2**20})())
+    with pytest.raises(InputError, match="the motion world needs .* GiB .* fewer --extra-characters"):
         MotionWorld.build(tiny_mocap, tmp_path / "cache", **SMALL)
     assert not any((tmp_path / "cache").glob("world-*"))
 
