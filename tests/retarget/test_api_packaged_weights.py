@@ -56,6 +56,14 @@ def test_packaged_weights_are_a_clone2d_checkpoint():
     assert loaded.stats.mean.shape == loaded.stats.std.shape
 
 
+def test_packaged_weights_smooth_as_chosen_on_validation():
+    from retarget.training.config import OUR_PREPROCESS
+
+    shipped = load_weights(api.PACKAGED_WEIGHTS).preprocess
+    assert (shipped.input_sigma, shipped.output_sigma) == (OUR_PREPROCESS.input_sigma, OUR_PREPROCESS.output_sigma)
+    assert shipped.body_height > 0  # every track brought to one skeleton height
+
+
 def test_packaged_weights_load_without_arguments(retargeter):
     assert retargeter.device == torch.device("cpu")
     assert not retargeter.model.training
