@@ -12,7 +12,6 @@ from retarget.model import variant_config
 from retarget.preprocess import PreprocessConfig
 from retarget.world.camera import CameraSpread
 
-
 # The inference smoothing of networks trained here, chosen on the validation split (500 cases, clean and with
 # detector noise of 0.3 % and 0.6 % of the height, `clone retarget eval --split val --noise`) and on the real
 # pairs: no smoothing of the input, whose detector noise the network learned to remove (training corrupts its
