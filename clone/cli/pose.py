@@ -96,6 +96,8 @@ def info(
          + (f" (first {summary.lost[0]})" if summary.lost else "")),
         ("missing", (f"{track.missing.mean():.1%} of joint-frames; "
                      f"{int(track.missing.all(axis=1).sum())} frames without any joint")),
+        ("outliers", (f"{summary.outliers} joint{'' if summary.outliers == 1 else 's'} far outside the image and "
+                      "body, read as missing")),
     ]
     for key, value in lines:
         out.print(f"[bold]{key:<11}[/bold]{value}", highlight=False)

@@ -28,6 +28,20 @@ def test_info_shows_counts_and_missing_table(tmp_path, walking_track):
     assert "2" in row and "5.0%" in row
 
 
+def test_info_counts_the_outliers_it_read_as_missing(tmp_path, walking_track):
+    folder = write_track(walking_track, tmp_path / "poses")
+    assert "outliers   0 joints" in invoke("pose", "info", folder).output
+    # Two joints of OpenPose's JSON far outside the 640x480 image and the body (a detector's stray points).
+    for frame, joint in ((7, 4), (9, 11)):
+        path = sorted(folder.glob("*_keypoints.json"))[frame]
+        doc = json.loads(path.read_text())
+        doc["people"][0]["pose_keypoints_2d"][3 * joint : 3 * joint + 2] = [3000.0, 2500.0]
+        path.write_text(json.dumps(doc))
+    result = invoke("pose", "info", folder)
+    assert result.exit_code == 0, result.output
+    assert "outliers   2 joints far outside the image and body, read as missing" in result.output
+
+
 def test_info_on_a_plain_openpose_folder_with_size(tmp_path, walking_track):
     """OpenPose's own output (no clone2d sidecar): fps by default, the image size as given."""
     folder = write_track(walking_track.replace(fps=25.0), tmp_path / "openpose")
