@@ -63,7 +63,7 @@ class GapReport:
         return text
 
 
-def _missing_runs(missing: np.ndarray) -> list[tuple[int, int]]:
+def true_runs(missing: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) of each run of True in a [T] bool array."""
     padded = np.concatenate([[False], missing, [False]]).astype(np.int8)
     edges = np.flatnonzero(np.diff(padded))
@@ -93,7 +93,7 @@ def fill_gaps(track: PoseTrack, max_gap: int) -> tuple[PoseTrack, GapReport]:
     filled: list[Gap] = []
     unfilled: list[Gap] = []
     for j, name in enumerate(names):
-        for start, stop in _missing_runs(track.missing[:, j]):
+        for start, stop in true_runs(track.missing[:, j]):
             if start == 0 or stop == t_len:
                 unfilled.append(Gap(name, start, stop, "edge"))
                 continue

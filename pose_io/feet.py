@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pose_io.clean import gaussian_kernel
+from pose_io.clean import gaussian_kernel, true_runs
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 from pose_io.measures import ANKLES, as_layout, check_joints, skeleton_height
@@ -39,6 +39,10 @@ log = logging.getLogger(__name__)
 
 # A knee bent by less than this (sine of the hip-knee-ankle turn) shows no side: it takes its neighbours'.
 _STRAIGHT = 1e-3
+# The contact test's defaults (``foot_contacts``), shared by the cleanup and the report's foot-skating measure.
+CONTACT_WINDOW = 31
+CONTACT_HEIGHT_TOL = 0.02
+CONTACT_SPEED_TOL = 0.01
 
 
 @dataclass(frozen=True)
@@ -54,8 +58,8 @@ class FootLockConfig:
 
     blend: int = 4
     root_sigma: float = 2.0
-    height_tol: float = 0.02
-    speed_tol: float = 0.01
+    height_tol: float = CONTACT_HEIGHT_TOL
+    speed_tol: float = CONTACT_SPEED_TOL
 
     def __post_init__(self) -> None:
         if self.blend < 0:
@@ -87,9 +91,9 @@ def foot_contacts(
     joints: np.ndarray,
     height: float,
     layout: JointLayout | str = "body15",
-    window: int = 31,
-    height_tol: float = 0.02,
-    speed_tol: float = 0.01,
+    window: int = CONTACT_WINDOW,
+    height_tol: float = CONTACT_HEIGHT_TOL,
+    speed_tol: float = CONTACT_SPEED_TOL,
 ) -> np.ndarray:
     """Which ankles touch the ground in which frames.
 
@@ -118,7 +122,8 @@ def foot_contacts(
 
 
 def track_contacts(track: PoseTrack, config: FootLockConfig = DEFAULT_FOOT_LOCK) -> np.ndarray:
-    """``foot_contacts`` of a track at its own height and a one-second window of its fps.
+    """``foot_contacts`` of a track (any layout that converts to body15) at its own height and a one-second
+    window of its fps.
 
     Returns:
         [T, 2] bool, columns in ``ANKLES`` order.
@@ -126,15 +131,10 @@ def track_contacts(track: PoseTrack, config: FootLockConfig = DEFAULT_FOOT_LOCK)
     Raises:
         InputError: the track never shows the bones its height needs.
     """
-    height = skeleton_height(track.joints, track.layout)
-    return foot_contacts(track.joints, height, track.layout, contact_window(track.fps), config.height_tol,
+    body = track if track.layout == "body15" else track.to_layout("body15")  # height bones in any layout
+    height = skeleton_height(body.joints, body.layout)
+    return foot_contacts(body.joints, height, body.layout, contact_window(body.fps), config.height_tol,
                          config.speed_tol)  # fmt: skip
-
-
-def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, stop)`` of every run of True in ``flags`` [T]."""
-    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
 
 
 def _smoothstep(u: np.ndarray) -> np.ndarray:
@@ -156,7 +156,7 @@ def ankle_offsets(ankle: np.ndarray, contact: np.ndarray, blend: int) -> np.ndar
     total = len(ankle)
     offset = np.zeros((total, 2))
     runs = []
-    for start, stop in _runs(contact):
+    for start, stop in true_runs(contact):
         seen = np.isfinite(ankle[start:stop]).all(axis=1)
         if seen.any():  # an interval never seen has nothing to hold to
             offset[start:stop, 0] = ankle[start:stop, 0][seen].mean() - ankle[start:stop, 0]
@@ -344,6 +344,6 @@ def lock_feet(track: PoseTrack, driver: PoseTrack, config: FootLockConfig = DEFA
     """
     if len(driver) != len(track):
         raise InputError(f"foot lock: the driver has {len(driver)} frames, the retargeted track {len(track)}")
-    contacts = track_contacts(driver.to_layout(track.layout) if driver.layout != track.layout else driver, config)
+    contacts = track_contacts(driver, config)
     log.info("foot lock: ankles in contact in %.0f%% of frames", 100.0 * contacts.mean())
     return track.replace(joints=foot_lock(track.joints, contacts, track.layout, config))

@@ -16,8 +16,6 @@ from pose_io.feet import DEFAULT_FOOT_LOCK, FootLockConfig, foot_lock, track_con
 from pose_io.track import PoseTrack
 from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
 
-LAYOUT = "body15"  # what the network reads and writes
-
 
 @dataclass(frozen=True, eq=False)
 class LockedMotion(PreparedMotion):
@@ -41,8 +39,7 @@ class FootLockedRetargeter:
     def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> LockedMotion:
         """The network input of ``motion`` (``inner``'s) with its foot contacts."""
         prepared = self.inner.prepare_motion(motion, name)
-        body = motion if motion.layout == LAYOUT else motion.to_layout(LAYOUT)
-        return LockedMotion(prepared.x, prepared.fps, prepared.name, track_contacts(body, self.config))
+        return LockedMotion(prepared.x, prepared.fps, prepared.name, track_contacts(motion, self.config))
 
     def retarget_prepared(self, motions: Sequence[LockedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
         """``inner``'s results for motions prepared by this wrapper, each cleaned with its driver's contacts."""

@@ -30,7 +30,13 @@ import numpy as np
 
 from clone.metrics.table import Scores, nan_mean, row_means
 from pose_io.errors import InputError
-from pose_io.feet import contact_window, foot_contacts  # one home: the cleanup honours the same contacts
+from pose_io.feet import (  # one home: the cleanup honours the same contacts
+    CONTACT_HEIGHT_TOL,
+    CONTACT_SPEED_TOL,
+    CONTACT_WINDOW,
+    contact_window,
+    foot_contacts,
+)
 from pose_io.layouts import JointLayout
 from pose_io.measures import (
     ANKLES,
@@ -81,9 +87,9 @@ def foot_slide(
     joints: np.ndarray,
     height: float,
     layout: JointLayout | str = "body15",
-    window: int = 31,
-    height_tol: float = 0.02,
-    speed_tol: float = 0.01,
+    window: int = CONTACT_WINDOW,
+    height_tol: float = CONTACT_HEIGHT_TOL,
+    speed_tol: float = CONTACT_SPEED_TOL,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Horizontal ankle slide while in contact (see ``foot_contacts`` for the arguments).
 
@@ -143,7 +149,7 @@ def pose_scores(
     reference_lengths: np.ndarray,
     height: float,
     layout: JointLayout | str = "body15",
-    window: int = 31,
+    window: int = CONTACT_WINDOW,
 ) -> Scores:
     """All ground-truth-free measures of one driven track.
 

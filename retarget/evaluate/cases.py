@@ -125,11 +125,11 @@ def sample_cases(
 
 def _score_case(
     case: Case, split: WorldSplit, source: WorldSplit | ClipMotions, methods: Mapping[str, Method],
-    config: EvalConfig, fps: float, noise: np.random.Generator,
+    config: EvalConfig, fps: float, noise: np.random.Generator | None = None,
 ) -> dict[str, CaseScores]:  # fmt: skip
     """Row -> :func:`case_scores` of one case, for every method and then every 3D reference.
 
-    ``noise`` draws the detector noise of the method inputs (``config.noise``).
+    ``noise`` draws the detector noise of the method inputs (``config.noise``; None: clean inputs).
     """
     skel_a, skel_b = split.characters[case.source_character], split.characters[case.character]
     pos_a = source.window3d(case.motion, case.source_character, config.length)  # [L, 18, 3]
@@ -143,7 +143,7 @@ def _score_case(
     truth = seen[0]
     scale = split.camera(case.view).scale  # pixels per metre, the same for every view
     height = skel_b.height * scale  # pixels
-    if config.noise > 0:
+    if noise is not None:
         motion2d = motion2d + noise.normal(0.0, config.noise * skel_a.height * scale, motion2d.shape)
         reference2d = reference2d + noise.normal(0.0, config.noise * height, reference2d.shape)
     size = tuple(split.canvas_size)
@@ -181,7 +181,7 @@ def evaluate(
     cases = sample_cases(source, split, config, np.random.default_rng(config.seed))
     rows: dict[str, list[CaseScores]] = {name: [] for name in [*methods, *REFERENCE_FUNCTIONS]}
     for k, case in enumerate(cases):
-        noise = np.random.default_rng([config.seed, 104723, k])
+        noise = np.random.default_rng([config.seed, 104723, k]) if config.noise > 0 else None
         for name, scores in _score_case(case, split, source, methods, config, fps, noise).items():
             rows[name].append(scores)
         if progress is not None:

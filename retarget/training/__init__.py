@@ -14,6 +14,7 @@ The split interface used here (the motion world provides it)::
 
     split.num_motions, split.num_characters, split.num_views
     split.window(motion, character, view, length=64, offset=0, rng=None) -> [length, 15, 2] float32
+    split.window(..., cameras=CameraSpread(...))  # only when TrainConfig.cameras is not the world's
 
 Modules: :mod:`~retarget.training.config` (:class:`TrainConfig`), :mod:`~retarget.training.data` (samples,
 real windows, statistics, body scales), :mod:`~retarget.training.step` (batch tensors, the loss of one step,

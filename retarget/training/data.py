@@ -77,7 +77,9 @@ class CrossSamples(Dataset):
         self.seed = seed
         self.scales = scales
         self.cameras = cameras
-        self.own_height = cameras != WORLD_CAMERAS and scales is not None
+        # Only a non-default spread is passed on: any WorldSplit (and test doubles) takes the default.
+        self._camera_kwargs = {} if cameras == WORLD_CAMERAS else {"cameras": cameras}
+        self.own_height = bool(self._camera_kwargs) and scales is not None
         if self.own_height and not (height is not None and height > 0):
             raise ValueError("a camera spread with body scales needs the target height")
         self.height = height
@@ -105,9 +107,7 @@ class CrossSamples(Dataset):
             key = (int(motions[m]), int(chars[c]), int(views[v]))
             if key not in cache:
                 camera = np.random.default_rng(int(view_seeds[v]))
-                # Only a non-default spread is passed: any WorldSplit (and test doubles) takes the default.
-                extra = {} if self.cameras == WORLD_CAMERAS else {"cameras": self.cameras}
-                window = self.split.window(*key, length=self.length, offset=0, rng=camera, **extra)
+                window = self.split.window(*key, length=self.length, offset=0, rng=camera, **self._camera_kwargs)
                 if self.own_height:
                     window = window * (self.height / skeleton_heights(window[None], LAYOUT)[0])
                 elif self.scales is not None:
