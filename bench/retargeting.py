@@ -10,7 +10,8 @@ wall-clock ratios of unchanged code by +-15 % between runs.
 
 Batch: 1,000 clips of 120 frames. In memory, ``retarget_many`` (all windows stacked) against ``retarget`` one
 clip at a time; as a command, ``clone retarget apply FOLDER`` (reads 1,000 npz, writes 1,000 npz) against one
-``clone retarget apply --backend torch`` process per clip, the only way before (timed on a few clips).
+``clone retarget apply --backend torch`` process per clip, the only way before (timed on a few clips); both
+without motion-code refinement (``--refine-steps 0``). The torch backend is timed with and without it.
 """
 
 from __future__ import annotations
@@ -97,9 +98,10 @@ def _in_turns(
 
 
 def _single_tracks(quick: bool) -> list[dict[str, Any]]:
-    from retarget.api import PACKAGED_WEIGHTS, load_retargeter
+    from retarget.api import PACKAGED_WEIGHTS, InferenceConfig, load_retargeter
 
-    ours_torch = load_retargeter(PACKAGED_WEIGHTS, device="cpu")
+    ours_torch = load_retargeter(PACKAGED_WEIGHTS, device="cpu", config=InferenceConfig(refine_steps=0))
+    ours_refined = load_retargeter(PACKAGED_WEIGHTS, device="cpu")  # the default: motion codes refined
     ours_numpy = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")
     source, _ = source_track()
     codes = ours_numpy.reference_codes(tiled(source, 120))
@@ -119,9 +121,12 @@ def _single_tracks(quick: bool) -> list[dict[str, Any]]:
         times = _in_turns({PLAIN: lambda x=x: _plain_forward(ours_torch, x, codes), **ours}, rounds, min_time)
         # The torch backend's own calls slow the baseline's next ones (measured: 29 -> 39 ms CPU at 10,000
         # frames, from the allocator's state, page faults included), so it is timed after, on its own.
-        torch_name = "ours, torch backend: retarget() end to end"
-        ours = {torch_name: lambda t=track: ours_torch.retarget(t, codes), **ours}
-        times.update(_in_turns({torch_name: ours[torch_name]}, rounds, min_time))
+        torch_name = "ours, torch backend: retarget() end to end, codes not refined"
+        refined_name = (f"ours, torch backend: retarget() end to end, motion codes refined "
+                        f"({ours_refined.config.refine_steps} steps, the default)")  # fmt: skip
+        ours = {torch_name: lambda t=track: ours_torch.retarget(t, codes),
+                refined_name: lambda t=track: ours_refined.retarget(t, codes), **ours}  # fmt: skip
+        times.update(_in_turns({n: ours[n] for n in (torch_name, refined_name)}, rounds, min_time))
         base_cpu, base_wall, base_faults = times[PLAIN]
         for name, fn in ours.items():
             cpu, wall, faults = times[name]
@@ -174,16 +179,17 @@ def _batch(quick: bool) -> list[dict[str, Any]]:
             out = tmp / "single.npz"
             t0 = time.perf_counter()
             subprocess.run([*clone_exe(), "retarget", "apply", str(path), "--skeleton", str(reference), "--out",
-                            str(out), "--backend", "torch", "--device", "cpu", "--threads", "1"], check=True,
-                           capture_output=True)  # fmt: skip
+                            str(out), "--backend", "torch", "--device", "cpu", "--threads", "1",
+                            "--refine-steps", "0"], check=True, capture_output=True)  # fmt: skip
             per_clip.append(time.perf_counter() - t0)
             out.unlink()
         before = 120 / (sum(per_clip) / len(per_clip))
         t0 = time.perf_counter()
         subprocess.run([*clone_exe(), "retarget", "apply", str(clips), "--skeleton", str(reference), "--out",
-                        str(tmp / "moved"), "--device", "cpu", "--threads", "1"], check=True, capture_output=True)
+                        str(tmp / "moved"), "--device", "cpu", "--threads", "1", "--refine-steps", "0"],
+                       check=True, capture_output=True)  # fmt: skip
         seconds = time.perf_counter() - t0
-        rows.append(row(case, "clone retarget apply FOLDER (one process: read, retarget, write npz)",
+        rows.append(row(case, "clone retarget apply FOLDER --refine-steps 0 (one process: read, retarget, write npz)",
                         120 * count / seconds, "frames/s", before,
                         "one `clone retarget apply --backend torch` process per clip (mean of 3)",
                         seconds=round(seconds, 2)))  # fmt: skip
@@ -204,6 +210,8 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
             (f"input: {origin}, tiled forwards-backwards to the length; packaged weights; 1 thread (torch and "
              "numpy's OpenBLAS); the commands run with --threads 1"),
             "default windows: 1,024 frames, 64 shared, 2 per pass (2,048 frames per network call)",
+            ("the batch rows run without motion-code refinement (--refine-steps 0, numpy), the fast path they "
+             "have measured since they were added; refinement's cost is the torch single-track rows' ratio"),
             ("single tracks: frames per CPU second of this process (time.process_time: the scheduler's time for "
              "the machine's other jobs left out); the baseline and the two numpy variants sampled in turns, then "
              "the torch backend (its calls slow the baseline's), 7 rounds of >= 0.3 CPU s at 120 frames, 9 rounds "

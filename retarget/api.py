@@ -10,14 +10,17 @@ the training windows). The output keeps the driver's frame count and fps; its si
 skeleton code, its root trajectory is integrated from the predicted velocity, centred where the reference
 stands and with the feet on the reference's ground line.
 
-Two backends run the same network: torch (:class:`Retargeter`, any device) and numpy
-(:class:`NumpyRetargeter`, CPU, no torch import: what ``clone retarget apply`` uses when the weights have an
-up-to-date ``.npz`` export beside them, see :mod:`retarget.numpy_weights`). Everything around the network
-(preparing tracks, windows, placing the result) is the same numpy code for both.
+The torch backend (:class:`Retargeter`, any device) refines each driver window's motion code with a few
+gradient steps before decoding it (:mod:`retarget.refine`; ``InferenceConfig.refine_steps``), which keeps the
+driver's range of motion. The numpy backend (:class:`NumpyRetargeter`, CPU, no torch import, see
+:mod:`retarget.numpy_weights`) runs the network without that refinement, as the torch one does with
+``refine_steps=0``: the fast path for live use (``clone retarget apply --refine-steps 0``). Everything around
+the network (preparing tracks, windows, placing the result) is the same numpy code for both.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -70,12 +73,19 @@ class Retargeter(RetargeterBase):
     def _run(self, windows: np.ndarray, body: np.ndarray | None, view: np.ndarray | None) -> np.ndarray:
         import torch
 
-        with torch.inference_mode():
-            # windows arrive as views of time-major memory (retarget.windows); torch gets the contiguous
-            # [N, 30, L] it always had, so its kernels, and their results, are the same
-            x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
-            y = self.model.decode(self.model.encode_motion(x), self._code_tensor(body), self._code_tensor(view))
-            return y.float().cpu().numpy()
+        from retarget.refine import decode_refined
+
+        c = self.config
+        # windows arrive as views of time-major memory (retarget.windows); torch gets the contiguous
+        # [N, 30, L] it always had, so its kernels, and their results, are the same
+        x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
+        if c.refine_steps == 0:
+            with torch.inference_mode():
+                y = self.model.decode(self.model.encode_motion(x), self._code_tensor(body), self._code_tensor(view))
+        else:
+            y = decode_refined(self.model, x, self._code_tensor(body), self._code_tensor(view),
+                               c.refine_steps, c.refine_rate, c.refine_anchor)  # fmt: skip
+        return y.float().cpu().numpy()
 
     def _encode_static(self, windows: np.ndarray, which: str) -> np.ndarray:
         import torch
@@ -101,7 +111,8 @@ class Retargeter(RetargeterBase):
 
 @dataclass(eq=False)
 class NumpyRetargeter(RetargeterBase):
-    """The same as :class:`Retargeter` with the network evaluated by numpy on the CPU; never imports torch.
+    """:class:`Retargeter` without motion-code refinement, the network evaluated by numpy on the CPU; never imports
+    torch. Its results are those of a :class:`Retargeter` whose ``config.refine_steps`` is 0.
 
     Its matrix products run on numpy's BLAS, whose thread count the process owns: on a machine another job
     keeps busy, :func:`retarget.blas.set_blas_threads` to the free cores (``clone`` does) is many times faster.
@@ -116,7 +127,11 @@ class NumpyRetargeter(RetargeterBase):
     model: NumpyRetargetNet
     stats: NormStats
     preprocess: PreprocessConfig
-    config: InferenceConfig = field(default_factory=InferenceConfig)
+    config: InferenceConfig = field(default_factory=lambda: InferenceConfig(refine_steps=0))
+
+    def __post_init__(self) -> None:
+        if self.config.refine_steps:
+            raise ValueError("the numpy backend does not refine motion codes (refine_steps must be 0)")
 
     def _run(self, windows: np.ndarray, body: np.ndarray | None, view: np.ndarray | None) -> np.ndarray:
         return self.model.run(windows, body, view)
@@ -152,8 +167,9 @@ def load_retargeter(
         device: "auto", "cpu", "cuda" or "cuda:N" (the numpy backend runs on the CPU: "auto" or "cpu").
         config: windowing of long tracks (default :class:`InferenceConfig`).
         backend: "torch" (:class:`Retargeter`); "numpy" (:class:`NumpyRetargeter`, needs an up-to-date export
-            beside the checkpoint, or an ``.npz`` as ``weights``); "auto": numpy when the device allows it and
-            such an export exists, else torch.
+            beside the checkpoint, or an ``.npz`` as ``weights``; it does not refine motion codes, so it runs
+            with ``config.refine_steps`` 0); "auto": numpy when the device allows it, such an export exists and
+            ``config`` asks for no refinement, else torch.
 
     Raises:
         InputError: no packaged weights yet, a missing/corrupt/foreign file, an unusable device, or a backend
@@ -171,13 +187,16 @@ def load_retargeter(
     weights = Path(weights)
     on_cpu = device.strip().lower() in ("auto", "cpu")
     is_export = weights.suffix.lower() == ".npz"
-    if backend != "torch" and on_cpu:
+    config = config or InferenceConfig()
+    if backend != "torch" and on_cpu and (backend == "numpy" or is_export or config.refine_steps == 0):
         from retarget.numpy_weights import current_export, read_npz
 
         export = read_npz(weights) if is_export else current_export(weights)
         if export is not None:
-            log.info("retargeting with the %s network from %s with numpy on the CPU", export.variant, export.path)
-            return NumpyRetargeter(export.model, export.stats, export.preprocess, config or InferenceConfig())
+            log.info("retargeting with the %s network from %s with numpy on the CPU (motion codes not refined)",
+                     export.variant, export.path)  # fmt: skip
+            return NumpyRetargeter(export.model, export.stats, export.preprocess,
+                                   dataclasses.replace(config, refine_steps=0))  # fmt: skip
         if backend == "numpy":
             raise InputError(
                 f"{weights}: no up-to-date numpy export beside it; write one with `python -m retarget.numpy_weights"
@@ -196,4 +215,4 @@ def load_retargeter(
         raise InputError(str(exc)) from None
     loaded = load_weights(weights)
     log.info("retargeting with the %s network from %s on %s", loaded.variant, loaded.path, dev)
-    return Retargeter(loaded.model.to(dev).eval(), loaded.stats, loaded.preprocess, dev, config or InferenceConfig())
+    return Retargeter(loaded.model.to(dev).eval(), loaded.stats, loaded.preprocess, dev, config)

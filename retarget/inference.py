@@ -33,6 +33,11 @@ from retarget.preprocess import (
 )
 from retarget.windows import pad_to_multiple, run_windowed
 
+# Refinement of the driver's motion code, chosen on the validation split (README, "Motion-code refinement").
+REFINE_STEPS = 5
+REFINE_RATE = 0.01
+REFINE_ANCHOR = 0.3
+
 _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses
 
 
@@ -47,6 +52,11 @@ class InferenceConfig:
         code_stride: step between those windows.
         batch: windows of ``window`` frames run through the network at once (``batch * window`` frames per
             pass; short clips of one length are stacked up to that many frames).
+        refine_steps: Adam steps that refine each driver window's motion code before it is decoded
+            (:mod:`retarget.refine`; torch backend only). 0 = the encoder's code as it is (the numpy
+            backend, the authors' models).
+        refine_rate: their learning rate.
+        refine_anchor: weight of the pull towards the encoder's code.
     """
 
     window: int = 1024
@@ -54,6 +64,9 @@ class InferenceConfig:
     code_window: int = 64
     code_stride: int = 32
     batch: int = 2
+    refine_steps: int = REFINE_STEPS
+    refine_rate: float = REFINE_RATE
+    refine_anchor: float = REFINE_ANCHOR
 
     def __post_init__(self) -> None:
         if self.window % 8 or self.code_window % 8:
@@ -62,6 +75,8 @@ class InferenceConfig:
             raise ValueError("overlap must be in [0, window)")
         if self.code_stride <= 0 or self.batch <= 0:
             raise ValueError("code_stride and batch must be positive")
+        if self.refine_steps < 0 or not self.refine_rate > 0 or not self.refine_anchor >= 0:
+            raise ValueError("refine_steps must be >= 0, refine_rate > 0 and refine_anchor >= 0")
 
 
 @dataclass(frozen=True, eq=False)

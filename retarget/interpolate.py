@@ -14,8 +14,10 @@ Two canvases, i.e. two conventions for codes and output:
 * ``video`` (default), as `clone retarget apply` does it: skeleton and view codes are the mean over windows
   (:meth:`Retargeter.reference_codes`), the poses are in A's pixels, smoothed over time like retargeted tracks
   and standing where A stands. A cell whose codes all come from whole clips is plain retargeting with those
-  codes, drawn in A's frame (exactly so up to the retargeter's window, 256 frames: the grid decodes in one pass,
-  long retargeting runs in cross-faded windows).
+  codes, drawn in A's frame, by the encoders' motion codes: the grid explores the latent space as the encoders
+  map it, without the test-time refinement of motion codes that retargeting does by default (so a corner is
+  ``retarget`` with ``InferenceConfig.refine_steps`` 0, exactly so up to the retargeter's window: the grid
+  decodes in one pass, long retargeting runs in cross-faded windows).
 * ``authors``, the authors' ``interpolate.py`` (ChrisWu1997/2D-Motion-Retargeting): static codes from one pass
   over the whole clip, the network on the unpadded clip (it gives 8 * floor(T / 8) frames), poses in the
   network's canvas (512 pixels) with the root starting at its centre (256, 256), not smoothed.

@@ -30,6 +30,7 @@ MAX_THREADS = 1024
 MAX_EXTRA_CHARACTERS = 4096  # 11 MB of world cache each
 MAX_PAIRS = 1_000_000
 MAX_LENGTH = 100_000
+MAX_REFINE_STEPS = 1000
 
 _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
 
@@ -58,8 +59,15 @@ def apply(
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     backend: Annotated[
         str, typer.Option("--backend", help="auto | numpy | torch. auto: numpy on the CPU (torch is not even "
-                          "imported) when the weights have an up-to-date .npz export beside them, else torch.")
+                          "imported) with --refine-steps 0 when the weights have an up-to-date .npz export beside "
+                          "them, else torch. numpy never refines motion codes.")
     ] = "auto",
+    refine_steps: Annotated[
+        int | None,
+        typer.Option("--refine-steps", help="Gradient steps that refine each driver window's motion code so the "
+                     "driver's range of motion is kept (torch; default 5, chosen on validation). 0: the encoder's "
+                     "code as it is, several times faster, and the numpy backend can run it."),
+    ] = None,
     to: Annotated[
         OutputFormat | None,
         typer.Option("--to", parser=OutputFormat, help="Format of the outputs of several inputs (default npz)."),
@@ -77,6 +85,7 @@ def apply(
     from retarget.batch import find_motions, is_batch, retarget_files
 
     check_number("--threads", threads, 1, MAX_THREADS)
+    check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     batch = is_batch(motion_poses)
     # Every output is checked before any work: a bad --preview must not fail after --out is written.
     if batch:
@@ -97,7 +106,7 @@ def apply(
     motion = None if batch else read_track(motion_poses[0], image_size=image_size)
     reference = read_track(skeleton, image_size=image_size)
     view_track = read_track(view, image_size=image_size) if view is not None else None
-    retargeter = _retargeter(weights, device, backend, threads)
+    retargeter = _retargeter(weights, device, backend, threads, refine_steps)
     codes = retargeter.reference_codes(reference, view_track, name=str(skeleton), view_name=str(view))
     if foot_lock:
         from retarget.foot_lock import FootLockedRetargeter
@@ -139,13 +148,22 @@ def _batch_outputs(out: Path, motions: list[Path], fmt: str, overwrite: bool) ->
     return outputs
 
 
-def _retargeter(weights: Path | None, device: str, backend: str, threads: int | None):  # -> RetargeterBase
-    """The network for --weights/--device/--backend, its threads set (BLAS threads for numpy, torch's otherwise)."""
+def _retargeter(
+    weights: Path | None, device: str, backend: str, threads: int | None, refine_steps: int | None
+):  # -> RetargeterBase
+    """The network for --weights/--device/--backend/--refine-steps, its threads set (BLAS threads for numpy,
+    torch's otherwise)."""
+    from pose_io.errors import InputError
     from retarget.api import NumpyRetargeter, load_retargeter
     from retarget.blas import set_blas_threads
+    from retarget.inference import InferenceConfig
     from retarget.runtime import free_cores
 
-    retargeter = load_retargeter(weights, device, backend=backend.strip().lower())
+    backend = backend.strip().lower()
+    if backend == "numpy" and refine_steps:
+        raise InputError("--refine-steps: the numpy backend does not refine motion codes; pass 0 or --backend torch")
+    config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
+    retargeter = load_retargeter(weights, device, config, backend=backend)
     if isinstance(retargeter, NumpyRetargeter):
         set_blas_threads(threads or free_cores())
     elif retargeter.device.type == "cpu":

@@ -37,7 +37,8 @@ OFFICIAL_FILES: dict[str, str] = {
     "authors' view-only": "pretrained_view.pth",
 }
 DESCRIPTIONS: dict[str, str] = {
-    "ours": "our network; skeleton and view codes and placement from the reference window",
+    "ours": "our network; skeleton and view codes and placement from the reference window; the driver's motion "
+    "code refined by a few gradient steps on its own reconstruction (retarget.refine, the default of inference)",
     "global scaling (EDN)": "Everybody Dance Now's global pose normalisation: per-frame scale and offset "
     "interpolated between the near and far ankle positions of the driver and of the reference",
     "2D per-limb scaling (FK)": "naive 2D retargeting: every 2D limb of the driver scaled to the reference's "
@@ -48,11 +49,17 @@ DESCRIPTIONS: dict[str, str] = {
 }
 
 
-def network_method(weights: str | Path, device: str = "cpu") -> tuple[Method, object]:
-    """A retargeting method backed by a checkpoint (ours or the authors'), and its ``Retargeter``."""
-    from retarget.api import load_retargeter
+def network_method(weights: str | Path, device: str = "cpu", refine: bool = True) -> tuple[Method, object]:
+    """A retargeting method backed by a checkpoint (ours or the authors'), and its ``Retargeter``.
 
-    net = load_retargeter(weights, device=device)
+    ``refine``: refine the driver's motion codes as inference does by default (``InferenceConfig``); False
+    runs the network as its encoders give the codes (the authors' models, as they released them).
+    """
+    from retarget.api import load_retargeter
+    from retarget.inference import InferenceConfig
+
+    net = load_retargeter(weights, device=device, config=None if refine else InferenceConfig(refine_steps=0),
+                          backend="torch")  # fmt: skip
 
     def run(motion: PoseTrack, reference: PoseTrack) -> PoseTrack:
         return net.retarget(motion, net.reference_codes(reference))
@@ -78,10 +85,12 @@ class _Rows:
     info: dict[str, dict[str, str]] = field(default_factory=dict)
     remarks: list[str] = field(default_factory=list)
 
-    def add_network(self, name: str, path: Path, description: str, device: str, world_seed: int | None) -> None:
+    def add_network(
+        self, name: str, path: Path, description: str, device: str, world_seed: int | None, refine: bool = True
+    ) -> None:
         if name in self.methods or name in BASELINES or name in REFERENCES_3D:
             raise InputError(f"--compare {name}: that row name is taken; choose another")
-        self.methods[name], self.nets[name] = network_method(path, device)
+        self.methods[name], self.nets[name] = network_method(path, device, refine)
         self.info[name] = {"kind": "network", "description": description, "weights": str(path)}
         trained = _training_seed(path)
         if world_seed is not None and trained is not None and trained != world_seed:
@@ -112,7 +121,7 @@ def _gather_rows(
         if not found:
             raise InputError(f"{official}: none of {', '.join(OFFICIAL_FILES.values())} is there")
         for name, path in found.items():
-            rows.add_network(name, path, DESCRIPTIONS[name], device, world_seed)
+            rows.add_network(name, path, DESCRIPTIONS[name], device, world_seed, refine=False)
     else:
         rows.remarks.append("authors' released model: not evaluated (no --official folder).")
     for name, method in BASELINES.items():

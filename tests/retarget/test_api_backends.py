@@ -20,7 +20,8 @@ pytestmark = pytest.mark.usefixtures("one_thread")
 
 @pytest.fixture(scope="module")
 def backends() -> tuple[Retargeter, NumpyRetargeter]:
-    small = InferenceConfig(window=128, overlap=32, batch=2)  # long tracks cross several windows
+    # long tracks cross several windows; the numpy backend is torch without motion-code refinement
+    small = InferenceConfig(window=128, overlap=32, batch=2, refine_steps=0)
     return load_retargeter(config=small), load_retargeter(config=small, backend="numpy")
 
 
@@ -77,6 +78,16 @@ def test_numpy_backend_modules_import_without_torch():
 
     code = ("import sys; import retarget.api, retarget.batch, retarget.numpy_weights, retarget.inference, "
             "retarget.runtime, retarget.blas, pose_io, pose_io.readers, pose_io.writers; "
-            "retarget.api.load_retargeter(backend='auto'); print('torch' in sys.modules)")
+            "config = retarget.inference.InferenceConfig(refine_steps=0); "
+            "retarget.api.load_retargeter(config=config, backend='auto'); print('torch' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_auto_takes_torch_when_codes_are_refined_and_numpy_never_refines():
+    assert InferenceConfig().refine_steps > 0
+    assert isinstance(load_retargeter(backend="auto"), Retargeter)
+    numpy_backend = load_retargeter(backend="numpy")  # asked for by name: it runs without refinement
+    assert isinstance(numpy_backend, NumpyRetargeter) and numpy_backend.config.refine_steps == 0
+    with pytest.raises(ValueError, match="does not refine"):
+        NumpyRetargeter(numpy_backend.model, numpy_backend.stats, numpy_backend.preprocess, InferenceConfig())

@@ -72,6 +72,24 @@ def test_apply_errors_are_one_line(inputs, tmp_path, monkeypatch):
     assert not (tmp_path / "o").exists()
 
 
+def test_apply_refine_steps(inputs, tmp_path):
+    runner = CliRunner()
+    base = ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]), "--size", "720x720",
+            "--weights", str(inputs["weights"]), "--device", "cpu"]  # fmt: skip
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--backend", "numpy", "--refine-steps", "3"])
+    assert result.exit_code == 2 and "numpy backend does not refine" in result.output
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--refine-steps", "-1"])
+    assert result.exit_code == 2 and "--refine-steps" in result.output
+    assert not (tmp_path / "a").exists()
+    outs = {}
+    for name, extra in (("plain", ["--refine-steps", "0", "--backend", "numpy"]), ("refined", [])):
+        result = runner.invoke(app, [*base, "--out", str(tmp_path / f"{name}.npz"), "--no-foot-lock", *extra])
+        assert result.exit_code == 0, result.output
+        outs[name] = read_track(tmp_path / f"{name}.npz").joints
+    assert outs["plain"].shape == outs["refined"].shape
+    assert abs(outs["plain"] - outs["refined"]).max() > 0.5  # pixels: the refined codes decode other poses
+
+
 def test_train_errors_are_one_line(tmp_path):
     runner = CliRunner()
     out = tmp_path / "r.pt"

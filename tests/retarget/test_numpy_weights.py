@@ -12,7 +12,7 @@ import torch
 
 from pose_io.errors import InputError
 from retarget import api
-from retarget.api import NumpyRetargeter, Retargeter, load_retargeter
+from retarget.api import InferenceConfig, NumpyRetargeter, Retargeter, load_retargeter
 from retarget.checkpoint import load_weights, save_checkpoint
 from retarget.model import RetargetNet, variant_config
 from retarget.numpy_weights import current_export, export_npz, file_sha256, main, npz_beside, read_npz
@@ -73,9 +73,13 @@ def test_backend_choice(checkpoint):
     with pytest.raises(InputError, match="no up-to-date numpy export"):
         load_retargeter(checkpoint, backend="numpy")
     npz = export_npz(checkpoint)
+    plain = InferenceConfig(refine_steps=0)
     for backend in ("auto", "numpy"):
-        assert isinstance(load_retargeter(checkpoint, "auto", backend=backend), NumpyRetargeter)
-        assert isinstance(load_retargeter(npz, "cpu", backend=backend), NumpyRetargeter)
+        assert isinstance(load_retargeter(checkpoint, "auto", plain, backend=backend), NumpyRetargeter)
+        assert isinstance(load_retargeter(npz, "cpu", backend=backend), NumpyRetargeter)  # an export: numpy
+    # auto refines motion codes by default, which only torch does; numpy asked for by name runs without
+    assert isinstance(load_retargeter(checkpoint, "auto", backend="auto"), Retargeter)
+    assert load_retargeter(checkpoint, "auto", backend="numpy").config.refine_steps == 0
     assert isinstance(load_retargeter(checkpoint, "cpu", backend="torch"), Retargeter)
     with pytest.raises(InputError, match="runs on the CPU"):
         load_retargeter(checkpoint, "cuda", backend="numpy")
@@ -86,4 +90,4 @@ def test_backend_choice(checkpoint):
 
 
 def test_the_packaged_weights_run_without_torch_by_choice():
-    assert isinstance(load_retargeter(backend="auto"), NumpyRetargeter)
+    assert isinstance(load_retargeter(config=InferenceConfig(refine_steps=0), backend="auto"), NumpyRetargeter)
