@@ -43,7 +43,8 @@ log = logging.getLogger(__name__)
 
 # The weights shipped with the package (trained by `clone retarget train`); their numpy export is the .npz beside.
 PACKAGED_WEIGHTS = Path(__file__).resolve().parent / "weights" / "clone2d_full.pt"
-# "auto": numpy on the CPU when the weights have an up-to-date export, else torch.
+# "auto": numpy on the CPU when the weights have an up-to-date export and no motion-code refinement is asked
+# for, else torch.
 BACKENDS = ("auto", "numpy", "torch")
 
 __all__ = [
@@ -61,7 +62,7 @@ class Retargeter(RetargeterBase):
         stats: its input statistics.
         preprocess: canvas height and smoothing.
         device: where it runs.
-        config: windowing of long tracks.
+        config: windowing of long tracks and motion-code refinement.
     """
 
     model: RetargetNet
@@ -83,8 +84,8 @@ class Retargeter(RetargeterBase):
             with torch.inference_mode():
                 y = self.model.decode(self.model.encode_motion(x), self._code_tensor(body), self._code_tensor(view))
         else:
-            y = decode_refined(self.model, x, self._code_tensor(body), self._code_tensor(view),
-                               c.refine_steps, c.refine_rate, c.refine_anchor)  # fmt: skip
+            y = decode_refined(self.model, x, self._code_tensor(body), self._code_tensor(view), c.refine_steps,
+                               c.refine_rate, c.refine_anchor, c.code_window, c.code_stride)  # fmt: skip
         return y.float().cpu().numpy()
 
     def _encode_static(self, windows: np.ndarray, which: str) -> np.ndarray:
@@ -121,7 +122,7 @@ class NumpyRetargeter(RetargeterBase):
         model: the network (:class:`retarget.numpy_net.NumpyRetargetNet`).
         stats: its input statistics.
         preprocess: canvas height and smoothing.
-        config: windowing of long tracks.
+        config: windowing of long tracks (``refine_steps`` must be 0).
     """
 
     model: NumpyRetargetNet
@@ -165,7 +166,7 @@ def load_retargeter(
             ``stdpose*.npy`` next to it, or a numpy export (``.npz``, :mod:`retarget.numpy_weights`); None = the
             weights shipped in the package.
         device: "auto", "cpu", "cuda" or "cuda:N" (the numpy backend runs on the CPU: "auto" or "cpu").
-        config: windowing of long tracks (default :class:`InferenceConfig`).
+        config: windowing of long tracks and motion-code refinement (default :class:`InferenceConfig`).
         backend: "torch" (:class:`Retargeter`); "numpy" (:class:`NumpyRetargeter`, needs an up-to-date export
             beside the checkpoint, or an ``.npz`` as ``weights``; it does not refine motion codes, so it runs
             with ``config.refine_steps`` 0); "auto": numpy when the device allows it, such an export exists and

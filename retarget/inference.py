@@ -8,6 +8,7 @@ windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and pl
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -43,7 +44,7 @@ _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (
 
 @dataclass(frozen=True)
 class InferenceConfig:
-    """How tracks are cut for the network.
+    """How tracks are cut for the network, and how much each driver window's motion code is refined.
 
     Attributes:
         window: frames per network pass for long tracks (a multiple of 8); memory is bounded by it.
@@ -75,8 +76,12 @@ class InferenceConfig:
             raise ValueError("overlap must be in [0, window)")
         if self.code_stride <= 0 or self.batch <= 0:
             raise ValueError("code_stride and batch must be positive")
-        if self.refine_steps < 0 or not self.refine_rate > 0 or not self.refine_anchor >= 0:
-            raise ValueError("refine_steps must be >= 0, refine_rate > 0 and refine_anchor >= 0")
+        if not isinstance(self.refine_steps, int) or self.refine_steps < 0:
+            raise ValueError(f"refine_steps must be an integer >= 0, got {self.refine_steps!r}")
+        if not (math.isfinite(self.refine_rate) and self.refine_rate > 0):
+            raise ValueError(f"refine_rate must be finite and > 0, got {self.refine_rate!r}")
+        if not (math.isfinite(self.refine_anchor) and self.refine_anchor >= 0):
+            raise ValueError(f"refine_anchor must be finite and >= 0, got {self.refine_anchor!r}")
 
 
 @dataclass(frozen=True, eq=False)

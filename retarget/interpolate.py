@@ -236,7 +236,8 @@ def _whole_clip_codes(retargeter: Retargeter, x: torch.Tensor) -> LatentCodes:
 
 @torch.inference_mode()
 def _padded_clip_codes(retargeter: Retargeter, x: torch.Tensor, body: np.ndarray, view: np.ndarray) -> LatentCodes:
-    """[1, 30, T] and static codes [C] -> codes as :meth:`Retargeter.retarget` uses them (reflect-padded clip)."""
+    """[1, 30, T] and static codes [C] -> codes as :meth:`Retargeter.retarget` uses them without refinement
+    (reflect-padded clip, the encoder's motion code)."""
     padded, _ = _pad_to_multiple(x, retargeter.model.config.downsampling)  # [1, 30, T8]
     return LatentCodes(
         retargeter.model.encode_motion(padded), retargeter._code_tensor(body), retargeter._code_tensor(view)

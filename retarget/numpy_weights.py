@@ -1,7 +1,7 @@
 """The torch-free weights file: a retargeting checkpoint's network, statistics and settings as a plain ``.npz``.
 
 Written from a checkpoint (clone2d's ``.pt`` or the authors' ``.pth``) and kept next to it with the same stem;
-``clone retarget apply`` then runs without torch (:class:`retarget.api.NumpyRetargeter`). Regenerate the
+``clone retarget apply --refine-steps 0`` then runs without torch (:class:`retarget.api.NumpyRetargeter`). Regenerate the
 packaged one after replacing ``retarget/weights/clone2d_full.pt``::
 
     python -m retarget.numpy_weights                  # packaged weights -> retarget/weights/clone2d_full.npz

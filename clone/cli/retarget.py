@@ -1,7 +1,7 @@
 """`clone retarget`: move a driver's motion onto a reference person's skeleton and view; train the network.
 
-torch and the pose readers are imported inside the commands so that `clone --help` stays fast, and `apply`
-imports no torch at all when the weights have a numpy export (``--backend auto``).
+torch and the pose readers are imported inside the commands so that `clone --help` stays fast, and `apply
+--refine-steps 0` imports no torch at all when the weights have a numpy export (``--backend auto``).
 """
 
 from __future__ import annotations
@@ -52,8 +52,8 @@ def apply(
     preview: Annotated[Path | None, typer.Option("--preview", help="Also draw the result into this .mp4.")] = None,
     weights: Annotated[
         Path | None,
-        typer.Option("--weights", help="clone2d checkpoint (or its numpy export, .npz), or the authors' "
-                     "pretrained_*.pth (default: shipped)."),
+        typer.Option("--weights", help="clone2d checkpoint (or its numpy export, .npz, which runs without "
+                     "refinement), or the authors' pretrained_*.pth (default: shipped)."),
     ] = None,
     size: Annotated[str | None, typer.Option("--size", help=_SIZE_HELP)] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
@@ -86,6 +86,9 @@ def apply(
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
+    if refine_steps and (backend.strip().lower() == "numpy" or (weights is not None and weights.suffix.lower() == ".npz")):
+        raise InputError("--refine-steps: the numpy backend does not refine motion codes (nor does a numpy export "
+                         "given as --weights); pass 0, or --backend torch with the .pt checkpoint")
     batch = is_batch(motion_poses)
     # Every output is checked before any work: a bad --preview must not fail after --out is written.
     if batch:
@@ -153,17 +156,13 @@ def _retargeter(
 ):  # -> RetargeterBase
     """The network for --weights/--device/--backend/--refine-steps, its threads set (BLAS threads for numpy,
     torch's otherwise)."""
-    from pose_io.errors import InputError
     from retarget.api import NumpyRetargeter, load_retargeter
     from retarget.blas import set_blas_threads
     from retarget.inference import InferenceConfig
     from retarget.runtime import free_cores
 
-    backend = backend.strip().lower()
-    if backend == "numpy" and refine_steps:
-        raise InputError("--refine-steps: the numpy backend does not refine motion codes; pass 0 or --backend torch")
     config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
-    retargeter = load_retargeter(weights, device, config, backend=backend)
+    retargeter = load_retargeter(weights, device, config, backend=backend.strip().lower())
     if isinstance(retargeter, NumpyRetargeter):
         set_blas_threads(threads or free_cores())
     elif retargeter.device.type == "cpu":
@@ -355,6 +354,11 @@ def evaluate(
                             "person's height (real OpenPose tracks: about 0.002-0.006).")
     ] = 0.0,
     split: Annotated[Split, typer.Option("--split", parser=Split, help="World split to measure on.")] = Split.TEST,
+    refine_steps: Annotated[
+        int | None,
+        typer.Option("--refine-steps", help="Motion-code refinement steps of ours and the --compare rows (default: "
+                     "inference's, 5; 0: the network alone). The authors' rows always run as released."),
+    ] = None,
     world_seed: Annotated[
         int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
     ] = 0,
@@ -379,6 +383,7 @@ def evaluate(
     check_number("--length", length, 16, MAX_LENGTH)
     check_number("--noise", noise, 0, 0.1)
     check_number("--threads", threads, 1, MAX_THREADS)
+    check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     named: dict[str, Path] = {}
@@ -400,7 +405,7 @@ def evaluate(
         doc, table = run_eval(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, seed=seed, noise=noise), fps=world.config.fps, device=device,
-            overwrite=overwrite, world_seed=world_seed,
+            overwrite=overwrite, world_seed=world_seed, refine_steps=refine_steps,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )
     typer.echo(table)

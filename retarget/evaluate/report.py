@@ -76,6 +76,9 @@ def report_notes(doc: Mapping) -> list[str]:
         what = method["description"]
         if method.get("weights"):
             what += f"; weights {method['weights']}"
+        if method.get("refine_steps") is not None:
+            what += f"; motion codes refined by {method['refine_steps']} steps" if method["refine_steps"] != "0" \
+                else "; motion codes not refined"
         notes.append(f"{name}: {what}.")
     notes += doc.get("remarks", [])
     if doc["silhouettes"]:

@@ -38,7 +38,7 @@ OFFICIAL_FILES: dict[str, str] = {
 }
 DESCRIPTIONS: dict[str, str] = {
     "ours": "our network; skeleton and view codes and placement from the reference window; the driver's motion "
-    "code refined by a few gradient steps on its own reconstruction (retarget.refine, the default of inference)",
+    "code refined by gradient steps on its own reconstruction (retarget.refine) unless the steps are 0",
     "global scaling (EDN)": "Everybody Dance Now's global pose normalisation: per-frame scale and offset "
     "interpolated between the near and far ankle positions of the driver and of the reference",
     "2D per-limb scaling (FK)": "naive 2D retargeting: every 2D limb of the driver scaled to the reference's "
@@ -49,17 +49,19 @@ DESCRIPTIONS: dict[str, str] = {
 }
 
 
-def network_method(weights: str | Path, device: str = "cpu", refine: bool = True) -> tuple[Method, object]:
+def network_method(
+    weights: str | Path, device: str = "cpu", refine_steps: int | None = None
+) -> tuple[Method, object]:
     """A retargeting method backed by a checkpoint (ours or the authors'), and its ``Retargeter``.
 
-    ``refine``: refine the driver's motion codes as inference does by default (``InferenceConfig``); False
-    runs the network as its encoders give the codes (the authors' models, as they released them).
+    ``refine_steps``: motion-code refinement steps (None: inference's default, ``InferenceConfig``; 0: the
+    network as its encoders give the codes, as the authors released their models).
     """
     from retarget.api import load_retargeter
     from retarget.inference import InferenceConfig
 
-    net = load_retargeter(weights, device=device, config=None if refine else InferenceConfig(refine_steps=0),
-                          backend="torch")  # fmt: skip
+    config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
+    net = load_retargeter(weights, device=device, config=config, backend="torch")
 
     def run(motion: PoseTrack, reference: PoseTrack) -> PoseTrack:
         return net.retarget(motion, net.reference_codes(reference))
@@ -86,12 +88,15 @@ class _Rows:
     remarks: list[str] = field(default_factory=list)
 
     def add_network(
-        self, name: str, path: Path, description: str, device: str, world_seed: int | None, refine: bool = True
-    ) -> None:
+        self, name: str, path: Path, description: str, device: str, world_seed: int | None,
+        refine_steps: int | None = None,
+    ) -> None:  # fmt: skip
         if name in self.methods or name in BASELINES or name in REFERENCES_3D:
             raise InputError(f"--compare {name}: that row name is taken; choose another")
-        self.methods[name], self.nets[name] = network_method(path, device, refine)
-        self.info[name] = {"kind": "network", "description": description, "weights": str(path)}
+        self.methods[name], self.nets[name] = network_method(path, device, refine_steps)
+        steps = self.nets[name].config.refine_steps
+        self.info[name] = {"kind": "network", "description": description, "weights": str(path),
+                           "refine_steps": str(steps)}  # fmt: skip
         trained = _training_seed(path)
         if world_seed is not None and trained is not None and trained != world_seed:
             self.remarks.append(f"Warning: {name} was trained on the world of seed {trained}, these cases come "
@@ -101,27 +106,28 @@ class _Rows:
 
 def _gather_rows(
     weights: str | Path | None, compare: Mapping[str, str | Path], official: str | Path | None, device: str,
-    world_seed: int | None,
+    world_seed: int | None, refine_steps: int | None = None,
 ) -> _Rows:  # fmt: skip
-    """Networks (ours, ``compare``, the authors'), then the 2D baselines, then the 3D references."""
+    """Networks (ours and ``compare`` refining ``refine_steps``, the authors' as released), then the 2D baselines,
+    then the 3D references."""
     from retarget.api import PACKAGED_WEIGHTS
 
     rows = _Rows()
     if weights is None and PACKAGED_WEIGHTS.is_file():
         weights = PACKAGED_WEIGHTS
     if weights is not None:
-        rows.add_network("ours", Path(weights), DESCRIPTIONS["ours"], device, world_seed)
+        rows.add_network("ours", Path(weights), DESCRIPTIONS["ours"], device, world_seed, refine_steps)
     else:
         rows.remarks.append("ours: not evaluated (no --weights and no shipped weights).")
     for name, path in compare.items():
-        rows.add_network(name, Path(path), "another checkpoint, run like ours", device, world_seed)
+        rows.add_network(name, Path(path), "another checkpoint, run like ours", device, world_seed, refine_steps)
     if official is not None:
         found = {name: Path(official) / file for name, file in OFFICIAL_FILES.items()
                  if (Path(official) / file).is_file()}  # fmt: skip
         if not found:
             raise InputError(f"{official}: none of {', '.join(OFFICIAL_FILES.values())} is there")
         for name, path in found.items():
-            rows.add_network(name, path, DESCRIPTIONS[name], device, world_seed, refine=False)
+            rows.add_network(name, path, DESCRIPTIONS[name], device, world_seed, refine_steps=0)  # as released
     else:
         rows.remarks.append("authors' released model: not evaluated (no --official folder).")
     for name, method in BASELINES.items():
@@ -212,6 +218,7 @@ def run_eval(
     device: str = "cpu",
     overwrite: bool = False,
     world_seed: int | None = None,
+    refine_steps: int | None = None,
     progress: Progress | None = None,
 ) -> tuple[dict, str]:
     """Evaluate every method; write ``eval.json``, ``eval.md`` and ``codes_<network>.png`` into ``out`` atomically.
@@ -233,6 +240,8 @@ def run_eval(
         world_seed: the seed ``split``'s world was built with; a checkpoint trained on another world's split
             (its recorded training seed differs) gets a warning in the notes, as its training motions may be
             among the cases.
+        refine_steps: motion-code refinement steps of ours and ``compare`` (None: inference's default); the
+            authors' models run without refinement, as released.
         progress: ``progress(done, total)`` over all cases and silhouette grids.
 
     Returns:
@@ -245,7 +254,7 @@ def run_eval(
     started = time.perf_counter()
     out = Path(out)
     check_new_output(out, overwrite)
-    rows = _gather_rows(weights, compare or {}, official, device, world_seed)
+    rows = _gather_rows(weights, compare or {}, official, device, world_seed, refine_steps)
     sources = _case_sources(split, bvh, config, fps)
     total = config.pairs * len(sources) + len(rows.nets)
     done = 0

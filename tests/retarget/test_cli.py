@@ -78,6 +78,10 @@ def test_apply_refine_steps(inputs, tmp_path):
             "--weights", str(inputs["weights"]), "--device", "cpu"]  # fmt: skip
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--backend", "numpy", "--refine-steps", "3"])
     assert result.exit_code == 2 and "numpy backend does not refine" in result.output
+    npz = ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]), "--size", "720x720",
+           "--weights", str(inputs["weights"].with_suffix(".npz")), "--refine-steps", "2"]  # fmt: skip
+    result = runner.invoke(app, [*npz, "--out", str(tmp_path / "a")])
+    assert result.exit_code == 2 and "numpy backend does not refine" in result.output
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--refine-steps", "-1"])
     assert result.exit_code == 2 and "--refine-steps" in result.output
     assert not (tmp_path / "a").exists()

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from retarget.evaluate import BASELINES, OFFICIAL_FILES, REFERENCES_3D
+from retarget.inference import REFINE_STEPS
 from tests.retarget.evaluate.helpers import TINY
 
 
@@ -41,6 +42,10 @@ def test_cli_writes_the_table_plots_and_json(
     ]
     table = (out / "eval.md").read_text()
     assert "| ours |" in table and "| 3D rotation copy |" in table and "h² × 10⁻³" in table
+    # ours and --compare rows refine motion codes as inference does; the authors' run as released
+    assert doc["methods"]["ours"]["refine_steps"] == doc["methods"]["no triplet"]["refine_steps"] == str(REFINE_STEPS)
+    assert doc["methods"]["authors' full"]["refine_steps"] == "0"
+    assert f"motion codes refined by {REFINE_STEPS} steps" in table and "motion codes not refined" in table
     assert "| ours |" in result.output  # printed too
     again = CliRunner().invoke(app, args)
     assert again.exit_code == 2 and "already exists" in again.output
@@ -54,6 +59,7 @@ def test_cli_input_errors_are_one_line(tiny_mocap: Path, cache: Path, tiny_weigh
         "none of pretrained_full.pth": ["--official", str(tmp_path)],
         "that row name is taken": ["--compare", f"ours={tiny_weights}"],
         "valid: test, val": ["--split", "train"],
+        "--refine-steps: must be >= 0": ["--refine-steps", "-2"],
     }
     for k, (message, extra) in enumerate(cases.items()):
         out = tmp_path / f"out{k}"
