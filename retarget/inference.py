@@ -35,8 +35,8 @@ from retarget.preprocess import (
 from retarget.windows import pad_to_multiple, run_windowed
 
 # Refinement of the driver's motion code, chosen on the validation split (README, "Motion-code refinement").
-REFINE_STEPS = 5
-REFINE_RATE = 0.01
+REFINE_STEPS = 30
+REFINE_RATE = 0.02
 REFINE_ANCHOR = 0.3
 
 _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses

@@ -65,7 +65,7 @@ def apply(
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Gradient steps that refine each driver window's motion code so the "
-                     "driver's range of motion is kept (torch; default 5, chosen on validation). 0: the encoder's "
+                     "driver's range of motion is kept (torch; default 30, chosen on validation). 0: the encoder's "
                      "code as it is, several times faster, and the numpy backend can run it."),
     ] = None,
     to: Annotated[
@@ -357,7 +357,7 @@ def evaluate(
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Motion-code refinement steps of ours and the --compare rows (default: "
-                     "inference's, 5; 0: the network alone). The authors' rows always run as released."),
+                     "inference's, 30; 0: the network alone). The authors' rows always run as released."),
     ] = None,
     world_seed: Annotated[
         int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
