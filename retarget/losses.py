@@ -42,6 +42,12 @@ class LossConfig:
             motion moved onto another window's skeleton and view, encoded again and moved back onto its own,
             should give the window back. Real tracks have no ground truth for a cross combination, so this is
             what checks that retargeting them keeps the motion (a damped copy cannot be undone).
+        skeleton_ratio_weight: weight of the skeleton-ratio term (0 = off; not in the paper): a window's skeleton
+            code should lie nearer the code of another window of its character (other motion, other view) than
+            ``skeleton_ratio`` times its distance to the code of another character in the same motion and view.
+            A ratio, so shrinking or growing the codes cannot satisfy it, unlike the triplet's fixed margin;
+            it asks the skeleton encoder to see past the view.
+        skeleton_ratio: that ratio.
     """
 
     cross: bool = True
@@ -52,6 +58,8 @@ class LossConfig:
     trajectory_weight: float = 0.0
     spread_weight: float = 0.0
     cycle_weight: float = 0.0
+    skeleton_ratio_weight: float = 0.0
+    skeleton_ratio: float = 0.5
 
 
 
@@ -169,6 +177,10 @@ def objective(
         losses["spread"] = config.spread_weight * spread.mean(dim=1).sum()
     if config.triplet:
         losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
+    if config.skeleton_ratio_weight > 0 and SKELETON in triple:
+        losses["skeleton_ratio"] = config.skeleton_ratio_weight * skeleton_ratio_loss(
+            _anchor_codes(model, inputs, SKELETON), triple[SKELETON], config.skeleton_ratio
+        )
     losses["total"] = sum(losses.values())
     return losses
 
@@ -180,16 +192,36 @@ def _triplet(
     (anchor) should be nearer to triple t's code (positive) than to the other triple's (negative)."""
     total = inputs.new_zeros(())
     for factor, codes in triple.items():
-        anchors = []
-        for t in (0, 1):
-            combo = [1 - t] * 3
-            combo[factor] = t
-            anchors.append(inputs[:, combo_index(*combo)])
-        anchor = _codes(model, torch.cat(anchors))[factor].flatten(1)  # [2B, D]
+        anchor = _anchor_codes(model, inputs, factor)  # [2B, D]
         own = codes.flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
         other = codes.flip(0).flatten(2).flatten(0, 1)
         total = total + 2 * F.triplet_margin_loss(anchor, own, other, margin=margin)
     return total
+
+
+def _anchor_codes(model: RetargetNet, inputs: torch.Tensor, factor: int) -> torch.Tensor:
+    """[2B, D] codes (of ``factor``) of the windows that share only ``factor`` with triple 0, then with triple 1."""
+    anchors = []
+    for t in (0, 1):
+        combo = [1 - t] * 3
+        combo[factor] = t
+        anchors.append(inputs[:, combo_index(*combo)])
+    return _codes(model, torch.cat(anchors))[factor].flatten(1)
+
+
+def skeleton_ratio_loss(anchor: torch.Tensor, codes: torch.Tensor, ratio: float) -> torch.Tensor:
+    """Mean of ``relu(|a - own| / |a - other| - ratio)``: scale-free, 0 once each anchor is ``ratio`` times nearer
+    its own triple's code than the other triple's.
+
+    Args:
+        anchor: [2B, D] codes of the windows sharing only this factor with triple 0, then triple 1.
+        codes: [2, B, D, ...] the two triples' codes.
+        ratio: the distance ratio asked for.
+    """
+    own = codes.flatten(2).flatten(0, 1)  # [2B, D]
+    other = codes.flip(0).flatten(2).flatten(0, 1)
+    near, far = (anchor - own).norm(dim=1), (anchor - other).norm(dim=1)
+    return F.relu(near / (far + 1e-6) - ratio).mean()
 
 
 def self_reconstruction(

@@ -231,6 +231,11 @@ def train(
         float, typer.Option("--cycle-weight", min=0.0, help="Weight of the cycle term on the --real tracks: a motion "
                             "moved onto another track and back should come back unchanged (0 = the paper).")
     ] = 0.0,
+    skeleton_ratio_weight: Annotated[
+        float, typer.Option("--skeleton-ratio-weight", min=0.0, help="Weight of a scale-free term asking each "
+                            "skeleton code to lie 2x nearer its character's code from another motion and view than "
+                            "another character's from the same motion and view (0 = the paper).")
+    ] = 0.0,
     extra_characters: Annotated[
         int, typer.Option("--extra-characters", min=0, help="Training characters added to the world's 64 (their "
                           "own random draws; validation and test characters unchanged).")
@@ -292,7 +297,7 @@ def train(
         loss = dataclasses.replace(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
-            cycle_weight=cycle_weight,
+            cycle_weight=cycle_weight, skeleton_ratio_weight=skeleton_ratio_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,

@@ -9,6 +9,7 @@ from retarget.losses import (
     ablation_config,
     foot_velocity,
     objective,
+    skeleton_ratio_loss,
     trajectory_error,
     used_combos,
 )
@@ -109,6 +110,21 @@ def test_trajectory_term_joins_the_objective_when_weighted():
     losses = objective(net, x, x, _stats(), LossConfig(trajectory_weight=0.5))
     assert "trajectory" in losses and float(losses["trajectory"].detach()) > 0
     assert "trajectory" not in objective(net, x, x, _stats(), LossConfig())
+
+
+def test_skeleton_ratio_is_scale_free_and_zero_once_anchors_are_near_their_own_code():
+    own, other = torch.tensor([[0.0, 0.0]]), torch.tensor([[4.0, 0.0]])
+    codes = torch.stack([own, other])  # [2, B=1, D]: triple 0, triple 1
+    near = torch.tensor([[1.0, 0.0], [3.5, 0.0]])  # each anchor 1/3 and 1/7 of the way: below a ratio of 0.5
+    assert float(skeleton_ratio_loss(near, codes, 0.5)) == 0.0
+    far = torch.tensor([[3.0, 0.0], [1.0, 0.0]])  # each nearer the other triple's code: 3 / 1 - 0.5 each
+    torch.testing.assert_close(skeleton_ratio_loss(far, codes, 0.5), torch.tensor(2.5), rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(skeleton_ratio_loss(10 * far, 10 * codes, 0.5), skeleton_ratio_loss(far, codes, 0.5))
+    net = RetargetNet().eval()
+    x = torch.randn(2, 8, 30, 32)
+    losses = objective(net, x, x, _stats(), LossConfig(skeleton_ratio_weight=1.0))
+    assert "skeleton_ratio" in losses and float(losses["skeleton_ratio"].detach()) >= 0
+    assert "skeleton_ratio" not in objective(net, x, x, _stats(), LossConfig())
 
 
 def test_cycle_term_is_the_round_trip_through_the_next_windows_codes():
