@@ -32,7 +32,7 @@ from retarget.preprocess import (
     prepare,
     shifted,
 )
-from retarget.windows import pad_to_multiple, run_windowed
+from retarget.windows import pad_to_multiple, run_windowed, strided_starts
 
 # Refinement of the driver's motion code, chosen on the validation split (README, "Motion-code refinement").
 REFINE_STEPS = 30
@@ -297,9 +297,7 @@ class RetargeterBase:
         if length < window:
             windows = pad_to_multiple(x, 8)[0][None]  # [1, 30, T8]
         else:
-            starts = list(range(0, length - window + 1, self.config.code_stride))
-            if starts[-1] != length - window:
-                starts.append(length - window)
+            starts = strided_starts(length, window, self.config.code_stride)
             windows = np.stack([x[:, s : s + window] for s in starts])  # [N, 30, window]
         batch = self.config.batch
         codes = np.concatenate([self._encode_static(windows[i : i + batch], which)

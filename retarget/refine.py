@@ -20,6 +20,7 @@ import torch.nn.functional as F
 
 from retarget.model import RetargetNet
 from retarget.preprocess import pose_channels, velocity_channels
+from retarget.windows import strided_starts
 
 
 def window_static_codes(
@@ -32,9 +33,7 @@ def window_static_codes(
     if frames <= length:
         pieces, count = x, 1
     else:
-        starts = list(range(0, frames - length + 1, stride))
-        if starts[-1] != frames - length:
-            starts.append(frames - length)
+        starts = strided_starts(frames, length, stride)
         pieces, count = torch.cat([x[:, :, s : s + length] for s in starts]), len(starts)  # [N * B, 30, length]
 
     def mean_code(encode) -> torch.Tensor:  # [N * B, C, 1] -> [B, C, 1]

@@ -31,6 +31,16 @@ def pad_to_multiple(x: np.ndarray, multiple: int, axis: int = -1) -> tuple[np.nd
     return np.pad(x, pads, mode="reflect"), left
 
 
+def strided_starts(frames: int, window: int, stride: int) -> list[int]:
+    """Starts every ``stride`` frames, plus one ending at the clip's end when the stride misses it (none when the
+    clip is shorter than ``window``): the training windows of a clip, and the windows a static code is averaged
+    over."""
+    starts = list(range(0, frames - window + 1, stride))
+    if starts and starts[-1] != frames - window:
+        starts.append(frames - window)
+    return starts
+
+
 def window_starts(total: int, window: int, overlap: int) -> list[int]:
     """First frames of the windows covering ``total`` (> ``window``) frames; the last one ends at ``total``."""
     return list(range(0, total - window, window - overlap)) + [total - window]

@@ -30,6 +30,7 @@ import numpy as np
 from pose_io.atomic import atomic_dir, check_free_space
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
+from retarget.windows import strided_starts as window_starts  # this module's name for it
 from retarget.world.camera import (
     AIM_HEIGHT,
     CANVAS_SIZE,
@@ -131,14 +132,6 @@ def motion_group(rel_path: str) -> str:
     if m:
         return f"cmu:{int(m[1])}_{int(m[2])}"
     return re.sub(r"[_\-]\d+$", "", stem)
-
-
-def window_starts(frames: int, window: int, stride: int) -> list[int]:
-    """Starts every ``stride`` frames, plus one ending at the clip's end when the stride misses it."""
-    starts = list(range(0, frames - window + 1, stride))
-    if starts and starts[-1] != frames - window:
-        starts.append(frames - window)
-    return starts
 
 
 def find_mocap_files(mocap_dir: Path) -> list[Path]:
