@@ -175,24 +175,27 @@ def objective(
     if config.spread_weight > 0:
         spread = spread_error(out.flatten(0, 1), truth.flatten(0, 1)).reshape(len(combos), -1)
         losses["spread"] = config.spread_weight * spread.mean(dim=1).sum()
+    ratio = config.skeleton_ratio_weight > 0 and SKELETON in triple
+    # anchor codes of the factors a term needs, each encoded once
+    needed = list(triple) if config.triplet else [SKELETON] if ratio else []
+    anchors = {factor: _anchor_codes(model, inputs, factor) for factor in needed}
     if config.triplet:
-        losses["triplet"] = config.triplet_weight * _triplet(model, inputs, triple, config.triplet_margin)
-    if config.skeleton_ratio_weight > 0 and SKELETON in triple:
+        losses["triplet"] = config.triplet_weight * _triplet(anchors, triple, config.triplet_margin)
+    if ratio:
         losses["skeleton_ratio"] = config.skeleton_ratio_weight * skeleton_ratio_loss(
-            _anchor_codes(model, inputs, SKELETON), triple[SKELETON], config.skeleton_ratio
+            anchors[SKELETON], triple[SKELETON], config.skeleton_ratio
         )
     losses["total"] = sum(losses.values())
     return losses
 
 
-def _triplet(
-    model: RetargetNet, inputs: torch.Tensor, triple: dict[int, torch.Tensor], margin: float
-) -> torch.Tensor:
+def _triplet(anchors: dict[int, torch.Tensor], triple: dict[int, torch.Tensor], margin: float) -> torch.Tensor:
     """For each code and each triple t: the code of the window sharing only that factor with triple t
-    (anchor) should be nearer to triple t's code (positive) than to the other triple's (negative)."""
-    total = inputs.new_zeros(())
+    (anchor, :func:`_anchor_codes`) should be nearer to triple t's code (positive) than to the other triple's
+    (negative)."""
+    total = next(iter(triple.values())).new_zeros(())
     for factor, codes in triple.items():
-        anchor = _anchor_codes(model, inputs, factor)  # [2B, D]
+        anchor = anchors[factor]  # [2B, D]
         own = codes.flatten(2).flatten(0, 1)  # [2B, D]: triple 0's codes, then triple 1's
         other = codes.flip(0).flatten(2).flatten(0, 1)
         total = total + 2 * F.triplet_margin_loss(anchor, own, other, margin=margin)
@@ -206,7 +209,8 @@ def _anchor_codes(model: RetargetNet, inputs: torch.Tensor, factor: int) -> torc
         combo = [1 - t] * 3
         combo[factor] = t
         anchors.append(inputs[:, combo_index(*combo)])
-    return _codes(model, torch.cat(anchors))[factor].flatten(1)
+    encode = {MOTION: model.encode_motion, SKELETON: model.encode_body, VIEW: model.encode_view}[factor]
+    return encode(torch.cat(anchors)).flatten(1)  # only this factor's encoder: the others' codes are not used
 
 
 def skeleton_ratio_loss(anchor: torch.Tensor, codes: torch.Tensor, ratio: float) -> torch.Tensor:
