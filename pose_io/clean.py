@@ -280,17 +280,19 @@ def interpolate_missing(values: np.ndarray) -> np.ndarray:
     return np.interp(t, t[ok], values[ok])
 
 
-def resample(track: PoseTrack, fps: float) -> PoseTrack:
+def resample(track: PoseTrack, fps: float, frames: int | None = None) -> PoseTrack:
     """The track at another frame rate, by linear interpolation in time.
 
-    Output frame ``i`` is at time ``i / fps``; frames cover the input's span, from its first frame to
-    its last (``floor((T - 1) * fps / track.fps) + 1`` frames). A joint is interpolated between the two
-    input frames around that time, and is missing when either of them lacks it (unless the time falls
-    on an input frame, which is then copied as it is).
+    Output frame ``i`` is at time ``i / fps``; by default frames cover the input's span, from its first
+    frame to its last (``floor((T - 1) * fps / track.fps) + 1`` frames). A joint is interpolated between
+    the two input frames around that time, and is missing when either of them lacks it (unless the time
+    falls on an input frame, which is then copied as it is).
 
     Args:
         track: the track.
         fps: the new frame rate (0.01 to 1,000, see :mod:`pose_io.limits`).
+        frames: the number of output frames instead (>= 1; e.g. to give a track back the frame count it
+            had before it was resampled); times past the input's last frame take that frame.
 
     Returns:
         The resampled track with ``fps`` set.
@@ -300,13 +302,16 @@ def resample(track: PoseTrack, fps: float) -> PoseTrack:
     """
     fps = check_fps(fps, "resampling fps")
     ratio = track.fps / fps
-    n_out = math.floor((track.num_frames - 1) / ratio + 1e-9) + 1
+    n_out = math.floor((track.num_frames - 1) / ratio + 1e-9) + 1 if frames is None else int(frames)
+    if n_out < 1:
+        raise InputError(f"resampling to {n_out} frames: at least 1 is needed")
     check_frame_count(n_out, f"resampling {track.num_frames} frames from {track.fps:g} to {fps:g} fps")
     joints = np.empty((n_out, *track.joints.shape[1:]), dtype=np.float32)  # [N, J, 2]
     conf = np.empty((n_out, track.joints.shape[1]), dtype=np.float32)  # [N, J]
     for start in range(0, n_out, _RESAMPLE_CHUNK):  # chunks keep the float64 temporaries small
         stop = min(start + _RESAMPLE_CHUNK, n_out)
-        joints[start:stop], conf[start:stop] = _interpolate(track, np.arange(start, stop) * ratio)
+        src = np.minimum(np.arange(start, stop) * ratio, track.num_frames - 1)  # past the end: the last frame
+        joints[start:stop], conf[start:stop] = _interpolate(track, src)
     return PoseTrack(joints, conf, fps, track.image_size, track.layout)
 
 

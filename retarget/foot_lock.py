@@ -39,7 +39,8 @@ class FootLockedRetargeter:
     def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> LockedMotion:
         """The network input of ``motion`` (``inner``'s) with its foot contacts."""
         prepared = self.inner.prepare_motion(motion, name)
-        return LockedMotion(prepared.x, prepared.fps, prepared.name, track_contacts(motion, self.config))
+        return LockedMotion(prepared.x, prepared.fps, prepared.name, prepared.frames,
+                            track_contacts(motion, self.config))
 
     def retarget_prepared(self, motions: Sequence[LockedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
         """``inner``'s results for motions prepared by this wrapper, each cleaned with its driver's contacts."""

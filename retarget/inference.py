@@ -3,6 +3,11 @@
 :class:`RetargeterBase` prepares tracks (:mod:`retarget.preprocess`), cuts them into windows and stacks the
 windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and places the result; a backend
 (:mod:`retarget.api`: torch or numpy) only runs the network on numpy arrays.
+
+The network runs at the frame rate it was trained at (``InferenceConfig.fps``): a track at another rate (25 fps
+film, 60 fps phone video) is resampled to it first and the result back to the driver's own frames. Run as they
+are, such drivers look slowed down or sped up to the network, and its root path and poses get worse (measured
+on the validation split: README, "Frame rates").
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from pose_io.clean import smooth_joints
+from pose_io.clean import resample, smooth_joints
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
@@ -38,6 +43,10 @@ from retarget.windows import pad_to_multiple, run_windowed, strided_starts
 REFINE_STEPS = 30
 REFINE_RATE = 0.02
 REFINE_ANCHOR = 0.3
+# The motion world's frame rate, which every clone2d network (and, by their data, the authors') was trained at.
+NETWORK_FPS = 30.0
+# Tracks within 1 % of it (29.97 fps video) run as they are: the training's time warps span 0.7-1.4x.
+FPS_TOLERANCE = 0.01
 
 _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses
 
@@ -58,6 +67,8 @@ class InferenceConfig:
             backend, the authors' models).
         refine_rate: their learning rate.
         refine_anchor: weight of the pull towards the encoder's code.
+        fps: frame rate the network runs at: drivers and references more than ``FPS_TOLERANCE`` off it are
+            resampled to it, and results back to the driver's frames (0 = every track at its own rate).
     """
 
     window: int = 1024
@@ -68,6 +79,7 @@ class InferenceConfig:
     refine_steps: int = REFINE_STEPS
     refine_rate: float = REFINE_RATE
     refine_anchor: float = REFINE_ANCHOR
+    fps: float = NETWORK_FPS
 
     def __post_init__(self) -> None:
         if self.window % 8 or self.code_window % 8:
@@ -82,6 +94,8 @@ class InferenceConfig:
             raise ValueError(f"refine_rate must be finite and > 0, got {self.refine_rate!r}")
         if not (math.isfinite(self.refine_anchor) and self.refine_anchor >= 0):
             raise ValueError(f"refine_anchor must be finite and >= 0, got {self.refine_anchor!r}")
+        if not (math.isfinite(self.fps) and self.fps >= 0):
+            raise ValueError(f"fps must be finite and >= 0, got {self.fps!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,14 +163,16 @@ class PreparedMotion:
     """A driver track reduced to what retargeting it needs (:meth:`RetargeterBase.prepare_motion`).
 
     Attributes:
-        x: [30, T] float32 normalised network input.
+        x: [30, T'] float32 normalised network input, at the network's frame rate.
         fps: the driver's frame rate (the output keeps it).
         name: how messages call it.
+        frames: the driver's frame count T (the output keeps it).
     """
 
     x: np.ndarray
     fps: float
     name: str
+    frames: int
 
     def __len__(self) -> int:
         return int(self.x.shape[-1])
@@ -215,12 +231,14 @@ class RetargeterBase:
         Raises:
             InputError: see :meth:`retarget` for the conditions.
         """
-        x, scale, body15 = self._prepare(track, name)  # [30, T]
+        x, scale, body15 = self._prepare(self._at_network_rate(track, name), name)  # [30, T]
         config = self.model.config
         body = self._static_code(x, "body") if config.body_channels is not None else None
         view_code = None
         if config.view_channels is not None:
-            view_code = self._static_code(x if view is None else self._prepare(view, view_name)[0], "view")
+            if view is not None:
+                x = self._prepare(self._at_network_rate(view, view_name), view_name)[0]
+            view_code = self._static_code(x, "view")
         placement = placement_of(body15, name)
         return ReferenceCodes(body, view_code, placement, track.image_size, scale)
 
@@ -262,7 +280,8 @@ class RetargeterBase:
 
     def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> PreparedMotion:
         """The network input of a driver track (:meth:`retarget` raises what this raises)."""
-        return PreparedMotion(self._prepare(motion, name)[0], float(motion.fps), name)
+        x = self._prepare(self._at_network_rate(motion, name), name)[0]
+        return PreparedMotion(x, float(motion.fps), name, len(motion))
 
     def retarget_prepared(self, motions: Sequence[PreparedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
         """Retarget prepared driver tracks (:meth:`prepare_motion`): windows of all of them go through the
@@ -274,10 +293,34 @@ class RetargeterBase:
             [m.x for m in motions], lambda windows: self._run(windows, body, view), self.model.config.downsampling,
             self.config.window, self.config.overlap, self.config.batch * self.config.window,
         )  # fmt: skip
-        return [self._finish(y, m.fps, reference, scale) for y, m in zip(outputs, motions)]
+        return [self._finish(y, m, reference, scale) for y, m in zip(outputs, motions)]
 
-    def _finish(self, y: np.ndarray, fps: float, reference: ReferenceCodes, scale: float) -> PoseTrack:
-        """[30, T] network output -> body15 track in the reference's pixels."""
+    def _network_rate(self, fps: float) -> float:
+        """The rate a track of ``fps`` goes through the network at (its own when close enough)."""
+        target = self.config.fps
+        return fps if not target or abs(fps / target - 1) <= FPS_TOLERANCE else target
+
+    def _at_network_rate(self, track: PoseTrack, name: str) -> PoseTrack:
+        """``track`` resampled to :meth:`_network_rate`.
+
+        Raises:
+            InputError: too few frames at that rate (checked before resampling).
+        """
+        rate = self._network_rate(track.fps)
+        if rate == track.fps:
+            return track
+        frames = math.floor((len(track) - 1) * rate / track.fps + 1e-9) + 1  # pose_io.clean.resample's count
+        if frames < self.min_frames:
+            raise InputError(
+                f"{name}: {len(track)} frames at {track.fps:g} fps, {frames} at the network's {rate:g} fps; the"
+                f" retargeting network needs at least {self.min_frames} at that rate"
+            )
+        return resample(track, rate)
+
+    def _finish(self, y: np.ndarray, motion: PreparedMotion, reference: ReferenceCodes, scale: float) -> PoseTrack:
+        """[30, T'] network output -> body15 track in the reference's pixels, with the driver's fps and frames."""
+        fps = motion.fps
+        rate = self._network_rate(fps)
         # [T, 15, 2] canvas, worked out in float64 (y's values converted as they are read), time-major
         joints = channels_to_joints(y[None], self.stats, dtype=np.float64)[0]
         joints /= scale  # reference pixels
@@ -289,7 +332,8 @@ class RetargeterBase:
         into = rows.reshape(joints.shape) if rows.dtype == np.float32 and rows.flags.c_contiguous else None
         placed = shifted(joints, placement_shift(joints, reference.placement),
                          np.empty(joints.shape, np.float32) if into is None else into)  # fmt: skip
-        return PoseTrack.complete(placed, fps, reference.image_size, LAYOUT.name, copy=False)  # = body15_track
+        track = PoseTrack.complete(placed, rate, reference.image_size, LAYOUT.name, copy=False)  # = body15_track
+        return track if rate == fps else resample(track, fps, frames=motion.frames)
 
     def _static_code(self, x: np.ndarray, which: str) -> np.ndarray:
         """[30, T] -> [C] mean code over windows of ``code_window`` frames."""

@@ -27,10 +27,11 @@ from pose_io.errors import InputError
 from pose_io.measures import skeleton_height
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
+from retarget.inference import NETWORK_FPS
 from retarget.preprocess import LAYOUT, LOCAL_INDEX, ROOT_INDEX, PreprocessConfig, prepare_track
 
-#: Frame rate of the motion world the network was trained on; every track is resampled to it.
-ENCODE_FPS = 30.0
+#: Frame rate every track is resampled to before encoding: the one the network was trained at.
+ENCODE_FPS = NETWORK_FPS
 
 
 class TrackEncoder(Protocol):

@@ -72,6 +72,20 @@ def test_resample_halves_and_interpolates():
     np.testing.assert_allclose(double.joints[1, :, 0], track.joints[0, :, 0] + 1.0, atol=1e-5)
 
 
+def test_resample_to_a_frame_count_gives_a_track_its_own_frames_back():
+    track = line_track(21)  # 30 fps
+    half = resample(track, 15.0)  # 11 frames: frame 20 is frame 10 of the half-rate track
+    back = resample(half, 30.0, frames=21)
+    assert back.num_frames == 21 and back.fps == 30.0
+    np.testing.assert_allclose(back.joints, track.joints, atol=1e-4)  # a line in time survives both ways
+    odd = resample(track, 24.0)  # 17 frames, the last at 0.667 s of the track's 0.667 s
+    longer = resample(odd, 30.0, frames=23)  # 2 frames past the end hold the last one
+    np.testing.assert_array_equal(longer.joints[-3:], np.repeat(odd.joints[-1:], 3, axis=0))
+    np.testing.assert_array_equal(resample(track, 15.0, frames=11).joints, half.joints)
+    with pytest.raises(InputError, match="at least 1"):
+        resample(track, 15.0, frames=0)
+
+
 def test_resample_missing_neighbour_makes_missing():
     track = with_missing(line_track(21), [4], 0)
     double = resample(track, 60.0)

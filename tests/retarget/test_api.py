@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from pose_io import InputError, PoseTrack
-from pose_io.clean import hold_fill, smooth_joints
+from pose_io.clean import hold_fill, resample, smooth_joints
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.readers import read_track
 from retarget import api
@@ -174,3 +174,36 @@ def test_reference_codes_keep_their_scale_and_refuse_a_bad_one(retargeter, clips
     assert back.scale == codes.scale
     with pytest.raises(InputError, match="scale"):
         ReferenceCodes.from_dict({**codes.to_dict(), "scale": np.array(-1.0)})
+
+
+def test_other_frame_rates_run_at_the_networks_and_come_back_to_their_own(retargeter, clips):
+    small, tall = clips["small_man"], clips["tall_man"]  # 30 fps
+    reference = retargeter.reference_codes(tall)
+    at_30 = retargeter.retarget(small, reference)
+    fast = resample(small, 60.0)  # every other frame is one of the 30 fps track's
+    at_60 = retargeter.retarget(fast, reference)
+    assert (len(at_60), at_60.fps) == (len(fast), 60.0) and not at_60.missing.any()
+    np.testing.assert_array_equal(at_60.joints[::2], at_30.joints)  # 60 -> 30 takes every other frame exactly
+    fast_reference = retargeter.reference_codes(resample(tall, 60.0))
+    np.testing.assert_array_equal(fast_reference.body, reference.body)
+    np.testing.assert_array_equal(fast_reference.view, reference.view)
+    # Within 1 % of the rate (29.97 fps video): as it is.
+    ntsc = retargeter.retarget(small.replace(fps=29.97), reference)
+    assert ntsc.fps == 29.97
+    np.testing.assert_array_equal(ntsc.joints, at_30.joints)
+    # fps 0: every track at its own rate; a 60 fps driver then looks slowed down to the network.
+    own_rate = dataclasses.replace(retargeter, config=InferenceConfig(refine_steps=0, fps=0.0))
+    slowed = own_rate.retarget(fast, reference)
+    assert len(slowed) == len(fast) and not np.allclose(slowed.joints[::2], at_30.joints, atol=1.0)
+
+
+def test_a_high_rate_track_too_short_at_the_networks_rate_is_refused(retargeter, clips):
+    short = clips["small_man"].frames(0, 20).replace(fps=60.0)
+    reference = retargeter.reference_codes(clips["tall_man"])
+    with pytest.raises(InputError, match="d.json: 20 frames at 60 fps, 10 at the network's 30 fps; .* at least 16"):
+        retargeter.retarget(short, reference, name="d.json")
+    with pytest.raises(InputError, match="r.json: 20 frames at 60 fps"):
+        retargeter.reference_codes(short, name="r.json")
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="fps must be finite"):
+            InferenceConfig(fps=bad)
