@@ -43,7 +43,8 @@ from retarget.windows import pad_to_multiple, run_windowed, strided_starts
 REFINE_STEPS = 30
 REFINE_RATE = 0.02
 REFINE_ANCHOR = 0.3
-# The motion world's frame rate, which every clone2d network (and, by their data, the authors') was trained at.
+# The motion world's frame rate, which every clone2d network was trained at (the authors' trained on Mixamo clips,
+# which Mixamo exports at 30 fps by default; their README states no rate).
 NETWORK_FPS = 30.0
 # Tracks within 1 % of it (29.97 fps video) run as they are: the training's time warps span 0.7-1.4x.
 FPS_TOLERANCE = 0.01
