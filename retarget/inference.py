@@ -7,7 +7,7 @@ windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and pl
 The network runs at the frame rate it was trained at (``InferenceConfig.fps``): a track at another rate (25 fps
 film, 60 fps phone video) is resampled to it first and the result back to the driver's own frames. Run as they
 are, such drivers look slowed down or sped up to the network, and its root path and poses get worse (measured
-on the validation split: README, "Frame rates").
+on the validation split: README, "At the network's frame rate").
 """
 
 from __future__ import annotations
