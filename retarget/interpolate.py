@@ -7,13 +7,15 @@ sequence, so cell ``[0, 0]`` is A's own codes and cell ``[-1, -1]`` has B's code
 
 A motion code has one column per 8 frames, so blending it needs clips of equal length: both are cut to the
 shorter one (and to at most ``frames`` frames, the authors' ``--max_length``) before anything else is done
-with them; nothing is resampled in time.
+with them, B first resampled to A's frame rate when they differ.
 
 Two canvases, i.e. two conventions for codes and output:
 
 * ``video`` (default), as `clone retarget apply` does it: skeleton and view codes are the mean over windows
   (:meth:`Retargeter.reference_codes`), the poses are in A's pixels, smoothed over time like retargeted tracks
-  and standing where A stands. A cell whose codes all come from whole clips is plain retargeting with those
+  and standing where A stands; like retargeting, the network runs at its own frame rate (A and B are resampled
+  to it when A's is another) and the poses come back at A's frames. A cell whose codes all come from whole clips
+  is plain retargeting with those
   codes, drawn in A's frame, by the encoders' motion codes: the grid explores the latent space as the encoders
   map it, without the test-time refinement of motion codes that retargeting does by default (so a corner is
   ``retarget`` with ``InferenceConfig.refine_steps`` 0, exactly so up to the retargeter's window: the grid
@@ -38,7 +40,7 @@ from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter, _pad_to_multiple
-from retarget.preprocess import LAYOUT, channels_to_joints, place
+from retarget.preprocess import LAYOUT, body15_track, channels_to_joints, place
 
 log = logging.getLogger(__name__)
 
@@ -201,12 +203,14 @@ def interpolate_grid(
     if length < len(a) or length < len(b):
         log.info("both clips cut to their first %d frames", length)
     a, b = a.frames(0, length), b.frames(0, length)
-    x = [retargeter._input(track, name) for track, name in zip((a, b), names)]  # 2 x [1, 30, T]
+    # the video canvas runs the network at its rate, as retargeting does (the same frame count for A and B)
+    net_a, net_b = (retargeter._at_network_rate(t, n) if canvas == "video" else t for t, n in zip((a, b), names))
+    x = [retargeter._input(track, name) for track, name in zip((net_a, net_b), names)]  # 2 x [1, 30, T']
 
     if canvas == "authors":
         codes, left = [_whole_clip_codes(retargeter, xi) for xi in x], 0
     else:
-        references = [retargeter.reference_codes(track, name=name) for track, name in zip((a, b), names)]
+        references = [retargeter.reference_codes(track, name=name) for track, name in zip((net_a, net_b), names)]
         codes = [_padded_clip_codes(retargeter, xi, ref.body, ref.view) for xi, ref in zip(x, references)]
         left = _pad_to_multiple(x[0], retargeter.model.config.downsampling)[1]
     cells = grid_codes(codes[0], codes[1], rows, cols, steps)
@@ -217,10 +221,13 @@ def interpolate_grid(
         poses = joints.numpy()  # [S*S, T8, 15, 2] canvas pixels
         image_size = (int(2 * half), int(2 * half))
     else:
-        joints = channels_to_joints(y[:, :, left : left + length].double(), retargeter.stats).numpy()
-        joints = joints / references[0].scale  # [S*S, T, 15, 2] A's pixels
+        joints = channels_to_joints(y[:, :, left : left + len(net_a)].double(), retargeter.stats).numpy()
+        joints = joints / references[0].scale  # [S*S, T', 15, 2] A's pixels
         sigma, placement = retargeter.preprocess.output_sigma, references[0].placement
         poses = np.stack([place(smooth_joints(cell, sigma), placement) for cell in joints])
+        if net_a.fps != a.fps:  # back to A's frames: [S*S, T, 15, 2]
+            poses = np.stack([resample(body15_track(cell, net_a.fps, a.image_size), a.fps, frames=length).joints
+                              for cell in poses]).astype(np.float64)  # fmt: skip
         image_size = a.image_size
     poses = poses.reshape(steps, steps, *poses.shape[1:])  # [S, S, T, 15, 2]
     return LatentGrid(poses, blend_weights(steps).double().numpy(), rows, cols, kept, canvas, image_size,

@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from pose_io import InputError
+from pose_io.clean import resample
 from pose_io.writers import write_track
 from retarget.api import InferenceConfig, ReferenceCodes, Retargeter, load_retargeter
 from retarget.interpolate import (
@@ -247,3 +248,14 @@ def test_authors_canvas_reproduces_their_interpolation(authors, vary, tmp_path):
     # Cell (0, 0) is tall_man's own reconstruction, which the authors' code wrote out itself.
     recon = np.load(authors["parity"] / "full_self_recon_tall_man.npy").transpose(2, 0, 1)  # [120, 15, 2]
     assert np.abs(ours[0, 0] - recon).max() < 1e-3
+
+
+def test_a_clip_at_another_rate_runs_at_the_networks_and_comes_back_at_its_own(retargeter, clips):
+    a, b = (resample(c.frames(0, FRAMES), 60.0) for c in clips)  # 60 fps: every other frame is a 30 fps one
+    grid = interpolate_grid(retargeter, a, b, vary=("motion", "view"), steps=2)
+    assert grid.poses.shape[2] == len(a) and grid.fps == 60.0
+    at_30 = interpolate_grid(retargeter, *(c.frames(0, FRAMES) for c in clips), vary=("motion", "view"), steps=2)
+    np.testing.assert_allclose(grid.poses[:, :, ::2], at_30.poses, atol=1e-3)
+    # a corner is still plain retargeting (which runs at the network's rate too)
+    expected = retargeter.retarget(a, retargeter.reference_codes(a)).joints
+    np.testing.assert_allclose(grid.poses[0, 0], expected, atol=2e-3)
