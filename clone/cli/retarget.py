@@ -15,6 +15,7 @@ import typer
 
 from clone.cli.choices import Ablation, OutputFormat, Split, Variant
 from clone.cli.common import DEVICE_HELP, console, training_device, user_errors
+from retarget.inference import REFINE_STEPS  # numpy and pose_io only, which the command line loads anyway
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -65,7 +66,7 @@ def apply(
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Gradient steps that refine each driver window's motion code so the "
-                     "driver's range of motion is kept (torch; default 30, chosen on validation). 0: the encoder's "
+                     f"driver's range of motion is kept (torch; default {REFINE_STEPS}, chosen on validation). 0: the encoder's "
                      "code as it is, several times faster, and the numpy backend can run it."),
     ] = None,
     to: Annotated[
@@ -362,7 +363,7 @@ def evaluate(
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Motion-code refinement steps of ours and the --compare rows (default: "
-                     "inference's, 30; 0: the network alone). The authors' rows always run as released."),
+                     f"inference's, {REFINE_STEPS}; 0: the network alone). The authors' rows always run as released."),
     ] = None,
     world_seed: Annotated[
         int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
