@@ -22,6 +22,7 @@ import numpy as np
 
 from pose_io.clean import resample, smooth_joints
 from pose_io.errors import InputError
+from pose_io.limits import check_frame_count
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
 from retarget.preprocess import (
@@ -305,12 +306,13 @@ class RetargeterBase:
         """``track`` resampled to :meth:`_network_rate`.
 
         Raises:
-            InputError: too few frames at that rate (checked before resampling).
+            InputError: too few or too many frames at that rate (checked before resampling).
         """
         rate = self._network_rate(track.fps)
         if rate == track.fps:
             return track
         frames = math.floor((len(track) - 1) * rate / track.fps + 1e-9) + 1  # pose_io.clean.resample's count
+        check_frame_count(frames, f"{name}: {len(track)} frames at {track.fps:g} fps, at the network's {rate:g} fps")
         if frames < self.min_frames:
             raise InputError(
                 f"{name}: {len(track)} frames at {track.fps:g} fps, {frames} at the network's {rate:g} fps; the"

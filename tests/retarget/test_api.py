@@ -204,6 +204,10 @@ def test_a_high_rate_track_too_short_at_the_networks_rate_is_refused(retargeter,
         retargeter.retarget(short, reference, name="d.json")
     with pytest.raises(InputError, match="r.json: 20 frames at 60 fps"):
         retargeter.reference_codes(short, name="r.json")
+    crawl = _tiled(clips["small_man"], 400).replace(fps=0.01)  # 1,197,001 frames at 30 fps
+    with pytest.raises(InputError, match="c.json: 400 frames at 0.01 fps, at the network's 30 fps: 1,197,001 frames;"
+                                         " at most 1,000,000"):
+        retargeter.retarget(crawl, reference, name="c.json")
     for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="fps must be finite"):
             InferenceConfig(fps=bad)
