@@ -302,23 +302,63 @@ def resample(track: PoseTrack, fps: float, frames: int | None = None) -> PoseTra
     """
     fps = check_fps(fps, "resampling fps")
     ratio = track.fps / fps
-    n_out = math.floor((track.num_frames - 1) / ratio + 1e-9) + 1 if frames is None else int(frames)
-    if n_out < 1:
-        raise InputError(f"resampling to {n_out} frames: at least 1 is needed")
-    check_frame_count(n_out, f"resampling {track.num_frames} frames from {track.fps:g} to {fps:g} fps")
+    n_out = _output_frames(track.num_frames, track.fps, fps, frames)
     joints = np.empty((n_out, *track.joints.shape[1:]), dtype=np.float32)  # [N, J, 2]
     conf = np.empty((n_out, track.joints.shape[1]), dtype=np.float32)  # [N, J]
     for start in range(0, n_out, _RESAMPLE_CHUNK):  # chunks keep the float64 temporaries small
         stop = min(start + _RESAMPLE_CHUNK, n_out)
-        src = np.minimum(np.arange(start, stop) * ratio, track.num_frames - 1)  # past the end: the last frame
-        joints[start:stop], conf[start:stop] = _interpolate(track, src)
+        joints[start:stop], conf[start:stop] = _interpolate(track, _sources(start, stop, ratio, track.num_frames))
     return PoseTrack(joints, conf, fps, track.image_size, track.layout)
+
+
+def resample_values(values: np.ndarray, fps: float, new_fps: float, frames: int | None = None) -> np.ndarray:
+    """Gap-free values ``[T, ...]`` (e.g. joints filled by :func:`hold_fill`) at another frame rate: the frames
+    and the linear interpolation of :func:`resample`, in float64.
+
+    Args:
+        values: [T, ...] values at ``fps``, no NaN.
+        fps: their frame rate.
+        new_fps: the new one (0.01 to 1,000).
+        frames: the number of output frames (default: those covering the input's span).
+
+    Returns:
+        [T', ...] float64.
+
+    Raises:
+        InputError: a rate out of range, or more than 1,000,000 output frames (checked before allocating).
+    """
+    fps, new_fps = check_fps(fps, "resampling fps"), check_fps(new_fps, "resampling fps")
+    n_out = _output_frames(len(values), fps, new_fps, frames)
+    out = np.empty((n_out, *values.shape[1:]), dtype=np.float64)
+    for start in range(0, n_out, _RESAMPLE_CHUNK):
+        stop = min(start + _RESAMPLE_CHUNK, n_out)
+        src = _sources(start, stop, fps / new_fps, len(values))
+        lo = np.floor(src).astype(np.int64)
+        hi = np.minimum(lo + 1, len(values) - 1)
+        w = (src - lo).reshape(-1, *([1] * (values.ndim - 1)))
+        low = values[lo].astype(np.float64)
+        out[start:stop] = np.where(w == 0, low, (1 - w) * low + w * values[hi])  # input frames copied exactly
+    return out
+
+
+def _output_frames(n_in: int, fps: float, new_fps: float, frames: int | None) -> int:
+    """Frames of a resampled track (see :func:`resample`), checked against the frame limit."""
+    n_out = math.floor((n_in - 1) * new_fps / fps + 1e-9) + 1 if frames is None else frames
+    if not isinstance(n_out, (int, np.integer)) or isinstance(n_out, bool) or n_out < 1:
+        raise InputError(f"resampling to {n_out!r} frames: a whole number of at least 1 is needed")
+    return check_frame_count(int(n_out), f"resampling {n_in} frames from {fps:g} to {new_fps:g} fps")
+
+
+def _sources(start: int, stop: int, ratio: float, n_in: int) -> np.ndarray:
+    """Fractional input frames of output frames ``start:stop`` (``ratio`` input frames each), snapped to an
+    input frame within 1e-6 of one, and past the input's end its last frame."""
+    src = np.minimum(np.arange(start, stop) * ratio, n_in - 1)
+    near = np.round(src)
+    return np.where(np.abs(src - near) < 1e-6, near, src)
 
 
 def _interpolate(track: PoseTrack, src: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joints [N, J, 2] and confidence [N, J] at fractional input frames ``src`` [N] (rules of :func:`resample`)."""
-    near = np.round(src)
-    src = np.where(np.abs(src - near) < 1e-6, near, src)
     lo = np.clip(np.floor(src).astype(np.int64), 0, track.num_frames - 1)
     hi = np.clip(lo + 1, 0, track.num_frames - 1)
     w = (src - lo)[:, None]  # [N, 1]

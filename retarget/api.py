@@ -96,11 +96,13 @@ class Retargeter(RetargeterBase):
             x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
             return encode(x)[:, :, 0].float().cpu().numpy()  # [N, C]
 
-    def _input(self, track: PoseTrack, name: str) -> torch.Tensor:
-        """[1, 30, T] float32 normalised network input of a real track, on ``device``."""
+    def _input(self, track: PoseTrack, name: str, rate: float | None = None) -> torch.Tensor:
+        """[1, 30, T'] float32 normalised network input of a real track at ``rate`` (:meth:`_network_rate`;
+        None: its own), on ``device``."""
         import torch
 
-        return torch.from_numpy(np.ascontiguousarray(self._prepare(track, name)[0]))[None].to(self.device)
+        x = self._prepare(track, name, rate)[0]
+        return torch.from_numpy(np.ascontiguousarray(x))[None].to(self.device)
 
     def _code_tensor(self, code: np.ndarray | None) -> torch.Tensor | None:
         import torch

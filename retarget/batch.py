@@ -104,7 +104,7 @@ def retarget_files(
         read: reads one input (e.g. :func:`pose_io.readers.read_track` with the user's options).
         fmt: output format, one of :data:`pose_io.writers.WRITERS`.
         overwrite: replace existing outputs.
-        chunk_frames: frames retargeted before their outputs are written.
+        chunk_frames: frames retargeted before their outputs are written (at the network's rate).
         progress: called as ``progress(clips done, clips)`` while reading and while writing.
 
     Returns:

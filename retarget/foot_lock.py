@@ -39,7 +39,7 @@ class FootLockedRetargeter:
     def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> LockedMotion:
         """The network input of ``motion`` (``inner``'s) with its foot contacts."""
         prepared = self.inner.prepare_motion(motion, name)
-        return LockedMotion(prepared.x, prepared.fps, prepared.name, prepared.frames,
+        return LockedMotion(prepared.x, prepared.fps, prepared.name, prepared.frames, prepared.rate,
                             track_contacts(motion, self.config))
 
     def retarget_prepared(self, motions: Sequence[LockedMotion], reference: ReferenceCodes) -> list[PoseTrack]:

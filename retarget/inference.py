@@ -22,7 +22,7 @@ import numpy as np
 
 from pose_io.clean import resample, smooth_joints
 from pose_io.errors import InputError
-from pose_io.limits import check_frame_count
+from pose_io.limits import MAX_FPS, MIN_FPS, check_frame_count
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
 from retarget.preprocess import (
@@ -96,8 +96,8 @@ class InferenceConfig:
             raise ValueError(f"refine_rate must be finite and > 0, got {self.refine_rate!r}")
         if not (math.isfinite(self.refine_anchor) and self.refine_anchor >= 0):
             raise ValueError(f"refine_anchor must be finite and >= 0, got {self.refine_anchor!r}")
-        if not (math.isfinite(self.fps) and self.fps >= 0):
-            raise ValueError(f"fps must be finite and >= 0, got {self.fps!r}")
+        if not (self.fps == 0 or MIN_FPS <= self.fps <= MAX_FPS):  # NaN fails both
+            raise ValueError(f"fps must be 0 or from {MIN_FPS:g} to {MAX_FPS:g}, got {self.fps!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,14 +169,17 @@ class PreparedMotion:
         fps: the driver's frame rate (the output keeps it).
         name: how messages call it.
         frames: the driver's frame count T (the output keeps it).
+        rate: the frame rate of ``x`` (the network's, or the driver's own: :meth:`RetargeterBase._network_rate`).
     """
 
     x: np.ndarray
     fps: float
     name: str
     frames: int
+    rate: float
 
     def __len__(self) -> int:
+        """Frames of ``x`` (at ``rate``; what the network runs on)."""
         return int(self.x.shape[-1])
 
 
@@ -210,7 +213,7 @@ class RetargeterBase:
 
     @property
     def min_frames(self) -> int:
-        """Shortest track (frames) the network takes."""
+        """Shortest track (frames at the network's rate, ``config.fps``) the network takes."""
         return _min_frames(self.model.config)  # the model's min_frames, worked out once per architecture
 
     def reference_codes(
@@ -233,13 +236,13 @@ class RetargeterBase:
         Raises:
             InputError: see :meth:`retarget` for the conditions.
         """
-        x, scale, body15 = self._prepare(self._at_network_rate(track, name), name)  # [30, T]
+        x, scale, body15 = self._prepare(track, name, self._network_rate(track, name))  # [30, T']
         config = self.model.config
         body = self._static_code(x, "body") if config.body_channels is not None else None
         view_code = None
         if config.view_channels is not None:
             if view is not None:
-                x = self._prepare(self._at_network_rate(view, view_name), view_name)[0]
+                x = self._prepare(view, view_name, self._network_rate(view, view_name))[0]
             view_code = self._static_code(x, "view")
         placement = placement_of(body15, name)
         return ReferenceCodes(body, view_code, placement, track.image_size, scale)
@@ -248,7 +251,8 @@ class RetargeterBase:
         """The motion of ``motion`` performed by the reference person, in the reference's pixels.
 
         Args:
-            motion: driver track, any layout convertible to body15, any length >= :attr:`min_frames`.
+            motion: driver track, any layout convertible to body15, at least :attr:`min_frames` frames long at
+                the network's rate (``config.fps``: a 60 fps track needs twice as many frames).
             reference: from :meth:`reference_codes` of a track with the same network.
             name: how error messages call ``motion`` (e.g. its file).
 
@@ -282,8 +286,8 @@ class RetargeterBase:
 
     def prepare_motion(self, motion: PoseTrack, name: str = "motion track") -> PreparedMotion:
         """The network input of a driver track (:meth:`retarget` raises what this raises)."""
-        x = self._prepare(self._at_network_rate(motion, name), name)[0]
-        return PreparedMotion(x, float(motion.fps), name, len(motion))
+        rate = self._network_rate(motion, name)
+        return PreparedMotion(self._prepare(motion, name, rate)[0], float(motion.fps), name, len(motion), rate)
 
     def retarget_prepared(self, motions: Sequence[PreparedMotion], reference: ReferenceCodes) -> list[PoseTrack]:
         """Retarget prepared driver tracks (:meth:`prepare_motion`): windows of all of them go through the
@@ -297,33 +301,29 @@ class RetargeterBase:
         )  # fmt: skip
         return [self._finish(y, m, reference, scale) for y, m in zip(outputs, motions)]
 
-    def _network_rate(self, fps: float) -> float:
-        """The rate a track of ``fps`` goes through the network at (its own when close enough)."""
-        target = self.config.fps
-        return fps if not target or abs(fps / target - 1) <= FPS_TOLERANCE else target
-
-    def _at_network_rate(self, track: PoseTrack, name: str) -> PoseTrack:
-        """``track`` resampled to :meth:`_network_rate`.
+    def _network_rate(self, track: PoseTrack, name: str) -> float:
+        """The frame rate ``track`` goes through the network at: ``config.fps``, or its own within
+        ``FPS_TOLERANCE`` of it (or with ``config.fps`` 0).
 
         Raises:
-            InputError: too few or too many frames at that rate (checked before resampling).
+            InputError: too few or too many frames at that rate.
         """
-        rate = self._network_rate(track.fps)
-        if rate == track.fps:
-            return track
-        frames = math.floor((len(track) - 1) * rate / track.fps + 1e-9) + 1  # pose_io.clean.resample's count
-        check_frame_count(frames, f"{name}: {len(track)} frames at {track.fps:g} fps, at the network's {rate:g} fps")
+        fps, target = track.fps, self.config.fps
+        rate = fps if not target or abs(fps / target - 1) <= FPS_TOLERANCE else target
+        if rate == fps:
+            frames, what, at = len(track), f"{name}: {len(track)} frames", ""
+        else:
+            frames = math.floor((len(track) - 1) * rate / fps + 1e-9) + 1  # pose_io.clean.resample's count
+            check_frame_count(frames, f"{name}: {len(track)} frames at {fps:g} fps, at the network's {rate:g} fps")
+            what = f"{name}: {len(track)} frames at {fps:g} fps, {frames} at the network's {rate:g} fps"
+            at = " at that rate"
         if frames < self.min_frames:
-            raise InputError(
-                f"{name}: {len(track)} frames at {track.fps:g} fps, {frames} at the network's {rate:g} fps; the"
-                f" retargeting network needs at least {self.min_frames} at that rate"
-            )
-        return resample(track, rate)
+            raise InputError(f"{what}; the retargeting network needs at least {self.min_frames}{at}")
+        return rate
 
     def _finish(self, y: np.ndarray, motion: PreparedMotion, reference: ReferenceCodes, scale: float) -> PoseTrack:
         """[30, T'] network output -> body15 track in the reference's pixels, with the driver's fps and frames."""
-        fps = motion.fps
-        rate = self._network_rate(fps)
+        fps, rate = motion.fps, motion.rate
         # [T, 15, 2] canvas, worked out in float64 (y's values converted as they are read), time-major
         joints = channels_to_joints(y[None], self.stats, dtype=np.float64)[0]
         joints /= scale  # reference pixels
@@ -336,7 +336,9 @@ class RetargeterBase:
         placed = shifted(joints, placement_shift(joints, reference.placement),
                          np.empty(joints.shape, np.float32) if into is None else into)  # fmt: skip
         track = PoseTrack.complete(placed, rate, reference.image_size, LAYOUT.name, copy=False)  # = body15_track
-        return track if rate == fps else resample(track, fps, frames=motion.frames)
+        if rate == fps and len(track) == motion.frames:
+            return track
+        return resample(track, fps, frames=motion.frames)
 
     def _static_code(self, x: np.ndarray, which: str) -> np.ndarray:
         """[30, T] -> [C] mean code over windows of ``code_window`` frames."""
@@ -373,14 +375,19 @@ class RetargeterBase:
                     " they come from a different retargeting model"
                 )
 
-    def _prepare(self, track: PoseTrack, name: str) -> tuple[np.ndarray, float, np.ndarray]:
-        """The network input [30, T] float32 of a real track, the scale to the canvas and its body15 joints
-        [T, 15, 2] in its own pixels (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
-        if len(track) < self.min_frames:
-            raise InputError(
-                f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
-            )
-        prepared = prepare(track, self.preprocess, name)
+    def _prepare(
+        self, track: PoseTrack, name: str, rate: float | None = None
+    ) -> tuple[np.ndarray, float, np.ndarray]:
+        """The network input [30, T'] float32 of a real track at ``rate`` (from :meth:`_network_rate`; None =
+        its own, checked here), the scale to the canvas and its body15 joints [T, 15, 2] in its own pixels and
+        frames (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
+        if rate is None:
+            rate = track.fps
+            if len(track) < self.min_frames:
+                raise InputError(
+                    f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
+                )
+        prepared = prepare(track, self.preprocess, name, fps=rate)
         # [30, T] float32, a view of [T, 30] (worked out in the canvas' memory, nothing else uses it), kept
         # time-major: windows are cut and run that way (retarget.windows)
         x = joints_to_channels(prepared.canvas[None], self.stats, overwrite=True, dtype=np.float32)[0]

@@ -7,7 +7,7 @@ sequence, so cell ``[0, 0]`` is A's own codes and cell ``[-1, -1]`` has B's code
 
 A motion code has one column per 8 frames, so blending it needs clips of equal length: both are cut to the
 shorter one (and to at most ``frames`` frames, the authors' ``--max_length``) before anything else is done
-with them, B first resampled to A's frame rate when they differ.
+with them, B first resampled to A's frame rate when they differ (``video`` canvas).
 
 Two canvases, i.e. two conventions for codes and output:
 
@@ -35,12 +35,12 @@ import cv2
 import numpy as np
 import torch
 
-from pose_io.clean import resample, smooth_joints
+from pose_io.clean import resample, resample_values, smooth_joints
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter, _pad_to_multiple
-from retarget.preprocess import LAYOUT, body15_track, channels_to_joints, place
+from retarget.preprocess import LAYOUT, channels_to_joints, place
 
 log = logging.getLogger(__name__)
 
@@ -203,14 +203,14 @@ def interpolate_grid(
     if length < len(a) or length < len(b):
         log.info("both clips cut to their first %d frames", length)
     a, b = a.frames(0, length), b.frames(0, length)
-    # the video canvas runs the network at its rate, as retargeting does (the same frame count for A and B)
-    net_a, net_b = (retargeter._at_network_rate(t, n) if canvas == "video" else t for t, n in zip((a, b), names))
-    x = [retargeter._input(track, name) for track, name in zip((net_a, net_b), names)]  # 2 x [1, 30, T']
+    # the video canvas runs the network at its rate, as retargeting does (A and B now share fps and length)
+    rate = retargeter._network_rate(a, names[0]) if canvas == "video" else None
+    x = [retargeter._input(track, name, rate) for track, name in zip((a, b), names)]  # 2 x [1, 30, T']
 
     if canvas == "authors":
         codes, left = [_whole_clip_codes(retargeter, xi) for xi in x], 0
     else:
-        references = [retargeter.reference_codes(track, name=name) for track, name in zip((net_a, net_b), names)]
+        references = [retargeter.reference_codes(track, name=name) for track, name in zip((a, b), names)]
         codes = [_padded_clip_codes(retargeter, xi, ref.body, ref.view) for xi, ref in zip(x, references)]
         left = _pad_to_multiple(x[0], retargeter.model.config.downsampling)[1]
     cells = grid_codes(codes[0], codes[1], rows, cols, steps)
@@ -221,13 +221,12 @@ def interpolate_grid(
         poses = joints.numpy()  # [S*S, T8, 15, 2] canvas pixels
         image_size = (int(2 * half), int(2 * half))
     else:
-        joints = channels_to_joints(y[:, :, left : left + len(net_a)].double(), retargeter.stats).numpy()
+        joints = channels_to_joints(y[:, :, left : left + x[0].shape[-1]].double(), retargeter.stats).numpy()
         joints = joints / references[0].scale  # [S*S, T', 15, 2] A's pixels
         sigma, placement = retargeter.preprocess.output_sigma, references[0].placement
         poses = np.stack([place(smooth_joints(cell, sigma), placement) for cell in joints])
-        if net_a.fps != a.fps:  # back to A's frames: [S*S, T, 15, 2]
-            poses = np.stack([resample(body15_track(cell, net_a.fps, a.image_size), a.fps, frames=length).joints
-                              for cell in poses]).astype(np.float64)  # fmt: skip
+        if rate != a.fps:  # back to A's frames: [S*S, T, 15, 2]
+            poses = np.stack([resample_values(cell, rate, a.fps, frames=length) for cell in poses])
         image_size = a.image_size
     poses = poses.reshape(steps, steps, *poses.shape[1:])  # [S, S, T, 15, 2]
     return LatentGrid(poses, blend_weights(steps).double().numpy(), rows, cols, kept, canvas, image_size,

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pose_io.clean import drop_outlier_joints, hold_fill, smooth_joints
+from pose_io.clean import drop_outlier_joints, hold_fill, resample_values, smooth_joints
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, convert_joints, get_layout, require_convertible
 from pose_io.measures import foot_points, median_of, skeleton_height, skeleton_heights
@@ -445,7 +445,7 @@ class PreparedTrack:
     """A real track as the network takes it, and what placing its result needs.
 
     Attributes:
-        canvas: [T, 15, 2] float64 clean body15 poses in the network canvas.
+        canvas: [T', 15, 2] float64 clean body15 poses in the network canvas (at the rate asked for).
         scale: the factor from the track's pixels to the canvas.
         body15: [T, 15, 2] body15 joints in the track's own pixels (outliers dropped, gaps NaN).
     """
@@ -455,12 +455,15 @@ class PreparedTrack:
     body15: np.ndarray
 
 
-def prepare(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> PreparedTrack:
+def prepare(
+    track: PoseTrack, config: PreprocessConfig, name: str = "track", fps: float | None = None
+) -> PreparedTrack:
     """A real track as clean body15 poses in the network canvas (the authors' preprocessing).
 
-    Converts to body15 once (dropping outlier joints), fills gaps (:func:`hold_fill`), smooths over time and
-    scales to the canvas (:func:`canvas_scale`: by the skeleton height, or by the image height for the
-    authors' weights).
+    Converts to body15 once (dropping outlier joints), fills gaps (:func:`hold_fill`), resamples to ``fps``
+    if given (:func:`pose_io.clean.resample_values`: after the filling, so a flickering joint does not turn
+    into wider gaps), smooths over time and scales to the canvas (:func:`canvas_scale`: by the skeleton
+    height, or by the image height for the authors' weights).
 
     Raises:
         InputError: see :func:`filled_body15`, or a body too small to scale.
@@ -468,6 +471,8 @@ def prepare(track: PoseTrack, config: PreprocessConfig, name: str = "track") -> 
     body = _body15_joints(track, name)
     body64 = body.astype(np.float64)  # converted once, for the filling and the skeleton height
     filled = _filled(body64, name)
+    if fps is not None and fps != track.fps:
+        filled = resample_values(filled, track.fps, fps)  # [T', 15, 2], a new array
     scale = _scale(track.image_size, config, body64, name)
     canvas = smooth_joints(filled, config.input_sigma, out=filled)  # filled is ours (body64 or a new array)
     canvas *= scale

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from pose_io import InputError, PoseTrack, fill_gaps, resample, smooth
+from pose_io.clean import resample_values
 
 
 def line_track(t_len: int = 20, fps: float = 30.0) -> PoseTrack:
@@ -84,6 +85,19 @@ def test_resample_to_a_frame_count_gives_a_track_its_own_frames_back():
     np.testing.assert_array_equal(resample(track, 15.0, frames=11).joints, half.joints)
     with pytest.raises(InputError, match="at least 1"):
         resample(track, 15.0, frames=0)
+
+
+def test_resample_values_is_resample_on_gap_free_arrays():
+    track = line_track(21)
+    for fps, frames in ((15.0, None), (24.0, None), (60.0, None), (30.0, 25)):
+        values = resample_values(track.joints.astype(np.float64), 30.0, fps, frames)
+        assert values.dtype == np.float64
+        np.testing.assert_allclose(values, resample(track, fps, frames).joints, atol=1e-4)
+    np.testing.assert_array_equal(resample_values(track.joints, 30.0, 15.0), track.joints[::2])  # frames copied
+    with pytest.raises(InputError, match="whole number"):
+        resample_values(track.joints, 30.0, 15.0, frames=2.5)
+    with pytest.raises(InputError, match="resampling fps"):
+        resample_values(track.joints, 0.0, 15.0)
 
 
 def test_resample_missing_neighbour_makes_missing():

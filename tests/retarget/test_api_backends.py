@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 
+from pose_io.clean import resample
 from pose_io.errors import InputError
 from retarget.api import InferenceConfig, NumpyRetargeter, Retargeter, load_retargeter
 from tests.figures import tall_and_small, walking_figure
@@ -91,3 +92,29 @@ def test_auto_takes_torch_when_codes_are_refined_and_numpy_never_refines():
     assert isinstance(numpy_backend, NumpyRetargeter) and numpy_backend.config.refine_steps == 0
     with pytest.raises(ValueError, match="does not refine"):
         NumpyRetargeter(numpy_backend.model, numpy_backend.stats, numpy_backend.preprocess, InferenceConfig())
+
+
+def test_clips_at_several_rates_at_once_keep_each_its_frames_and_rate(backends, people):
+    numpy_backend, torch_backend = backends[1], backends[0]
+    reference = numpy_backend.reference_codes(people["small"])
+    base = walking_figure(96, seed=7)
+    drivers = [resample(base, fps) for fps in (60.0, 24.0, 29.9, 15.0)]  # 15 fps: 48 frames, 95 at 30 fps
+    many = numpy_backend.retarget_many(drivers, reference)
+    assert [(len(m), m.fps) for m in many] == [(len(d), d.fps) for d in drivers]
+    for driver, moved in zip(drivers, many):
+        assert moved.equals(numpy_backend.retarget(driver, reference), atol=PX)
+    assert all(a.equals(b, atol=PX) for a, b in zip(many, torch_backend.retarget_many(drivers, reference)))
+    short = resample(walking_figure(12, seed=3), 15.0)  # 6 frames at 15 fps, 11 at 30: too few either way
+    with pytest.raises(InputError, match="6 frames at 15 fps, 11 at the network's 30 fps"):
+        numpy_backend.retarget(short, reference)
+    upsampled = resample(walking_figure(20, seed=3), 15.0)  # 10 frames at 15 fps, 19 at 30: enough
+    assert len(numpy_backend.retarget(upsampled, reference)) == 10
+
+
+def test_a_view_track_at_another_rate_gives_the_same_view_code(backends, people):
+    r = backends[1]
+    at_30 = r.reference_codes(people["tall"], people["small"])
+    at_60 = r.reference_codes(people["tall"], resample(people["small"], 60.0))
+    np.testing.assert_allclose(at_60.view, at_30.view, atol=1e-3)  # the body's scale: medians over its own frames
+    with pytest.raises(InputError, match="v.npz: 20 frames at 60 fps, 10 at the network's 30 fps"):
+        r.reference_codes(people["tall"], people["small"].frames(0, 20).replace(fps=60.0), view_name="v.npz")

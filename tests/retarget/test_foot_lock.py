@@ -5,6 +5,7 @@ import pytest
 from typer.testing import CliRunner
 
 from clone.cli.main import app
+from pose_io.clean import resample
 from pose_io.feet import lock_feet
 from pose_io.readers import read_track
 from pose_io.writers import write_track
@@ -49,3 +50,12 @@ def test_apply_option(people, tmp_path):
     np.testing.assert_allclose(runs["--no-foot-lock"].joints, plain.joints, atol=1e-3)
     assert np.abs(runs["--foot-lock"].joints - plain.joints).max() > 0.1
     assert runs[""].equals(runs["--foot-lock"])  # on by default
+
+
+def test_a_driver_at_another_rate_is_locked_on_its_own_frames(people):
+    retargeter = api.load_retargeter(api.PACKAGED_WEIGHTS, device="cpu", backend="numpy")
+    motion = resample(read_track(people["tall"]), 60.0)
+    codes = retargeter.reference_codes(read_track(people["small"]))
+    locked = FootLockedRetargeter(retargeter).retarget(motion, codes)
+    assert (len(locked), locked.fps) == (len(motion), 60.0)
+    assert locked.equals(lock_feet(retargeter.retarget(motion, codes), motion))
