@@ -48,6 +48,12 @@ class LossConfig:
             A ratio, so shrinking or growing the codes cannot satisfy it, unlike the triplet's fixed margin;
             it asks the skeleton encoder to see past the view.
         skeleton_ratio: that ratio.
+        skeleton_cluster_weight: weight of the skeleton-cluster term (0 = off; not in the paper; needs the
+            samples' ids): a character's skeleton codes over the 2 motions x 2 views of its sample should spread
+            (mean distance to their centre) less than ``skeleton_cluster_ratio`` times the distance from that
+            centre to the nearest other character's in the batch: the silhouette the paper reports, on the
+            hardest negatives a batch holds.
+        skeleton_cluster_ratio: that ratio.
     """
 
     cross: bool = True
@@ -60,6 +66,8 @@ class LossConfig:
     cycle_weight: float = 0.0
     skeleton_ratio_weight: float = 0.0
     skeleton_ratio: float = 0.5
+    skeleton_cluster_weight: float = 0.0
+    skeleton_cluster_ratio: float = 0.5
 
 
 
@@ -132,7 +140,8 @@ def _codes(model: RetargetNet, x: torch.Tensor) -> dict[int, torch.Tensor]:
 
 
 def objective(
-    model: RetargetNet, inputs: torch.Tensor, targets: torch.Tensor, stats: NormStats, config: LossConfig
+    model: RetargetNet, inputs: torch.Tensor, targets: torch.Tensor, stats: NormStats, config: LossConfig,
+    ids: torch.Tensor | None = None,
 ) -> dict[str, torch.Tensor]:
     """Losses of one batch of 8-combination samples.
 
@@ -142,6 +151,7 @@ def objective(
         targets: [B, 8, 30, T] normalised ground truth.
         stats: normalisation statistics (for the foot velocity).
         config: loss terms and weights.
+        ids: [B, 2, 3] (motion, character, view) ids of the two triples (for the skeleton-cluster term).
 
     Returns:
         Named loss terms (already weighted) and their sum under ``"total"``.
@@ -185,8 +195,35 @@ def objective(
         losses["skeleton_ratio"] = config.skeleton_ratio_weight * skeleton_ratio_loss(
             anchors[SKELETON], triple[SKELETON], config.skeleton_ratio
         )
+    if config.skeleton_cluster_weight > 0 and SKELETON in triple and ids is not None:
+        codes = model.encode_body(inputs.flatten(0, 1)).flatten(1).reshape(b, len(COMBOS), -1)  # [B, 8, D]
+        own = [[combo_index(m, t, v) for m in (0, 1) for v in (0, 1)] for t in (0, 1)]  # character t's windows
+        per_character = torch.stack([codes[:, k] for k in own], dim=1)  # [B, 2, 4, D]
+        losses["skeleton_cluster"] = config.skeleton_cluster_weight * skeleton_cluster_loss(
+            per_character, ids[:, :, SKELETON], config.skeleton_cluster_ratio
+        )
     losses["total"] = sum(losses.values())
     return losses
+
+
+def skeleton_cluster_loss(codes: torch.Tensor, characters: torch.Tensor, ratio: float) -> torch.Tensor:
+    """Mean of ``relu(spread / nearest - ratio)`` over the batch's characters: scale-free.
+
+    Args:
+        codes: [B, 2, K, D] skeleton codes of each sample's two characters, each in K windows.
+        characters: [B, 2] their ids (a character twice in a batch is not its own negative).
+        ratio: the spread asked for, in distances to the nearest other character.
+    """
+    flat = codes.flatten(0, 1)  # [2B, K, D]
+    centre = flat.mean(dim=1)  # [2B, D]
+    spread = (flat - centre[:, None]).norm(dim=-1).mean(dim=1)  # [2B]
+    ids = characters.flatten()
+    distance = torch.cdist(centre, centre).masked_fill(ids[:, None] == ids[None, :], float("inf"))  # [2B, 2B]
+    nearest = distance.min(dim=1).values
+    valid = torch.isfinite(nearest)
+    if not valid.any():
+        return codes.new_zeros(())
+    return F.relu(spread[valid] / (nearest[valid] + 1e-6) - ratio).mean()
 
 
 def _triplet(anchors: dict[int, torch.Tensor], triple: dict[int, torch.Tensor], margin: float) -> torch.Tensor:

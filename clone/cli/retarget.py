@@ -237,6 +237,15 @@ def train(
                             "skeleton code to lie 2x nearer its character's code from another motion and view than "
                             "another character's from the same motion and view (0 = the paper).")
     ] = 0.0,
+    skeleton_cluster_weight: Annotated[
+        float, typer.Option("--skeleton-cluster-weight", min=0.0, help="Weight of a scale-free term asking each "
+                            "character's skeleton codes over 2 motions x 2 views to spread less than a share of their "
+                            "distance to the nearest other character's in the batch (0 = the paper).")
+    ] = 0.0,
+    skeleton_cluster_ratio: Annotated[
+        float, typer.Option("--skeleton-cluster-ratio", min=0.0, help="The spread --skeleton-cluster-weight asks "
+                            "for, in distances to the nearest other character.")
+    ] = 0.5,
     extra_characters: Annotated[
         int, typer.Option("--extra-characters", min=0, help="Training characters added to the world's 64 (their "
                           "own random draws; validation and test characters unchanged).")
@@ -299,6 +308,8 @@ def train(
             ablation_config(ablation.value), trajectory_weight=trajectory_weight, foot_weight=foot_weight,
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
             cycle_weight=cycle_weight, skeleton_ratio_weight=skeleton_ratio_weight,
+            skeleton_cluster_weight=skeleton_cluster_weight,
+            skeleton_cluster_ratio=skeleton_cluster_ratio,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,

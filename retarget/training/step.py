@@ -94,7 +94,7 @@ class TrainLoss(nn.Module):
 
     def forward(
         self, inputs: torch.Tensor, targets: torch.Tensor, real_inputs: torch.Tensor | None = None,
-        real_targets: torch.Tensor | None = None, weight: float = 1.0,
+        real_targets: torch.Tensor | None = None, weight: float = 1.0, ids: torch.Tensor | None = None,
     ) -> tuple[dict[str, torch.Tensor], torch.Tensor]:
         """Loss terms and what to minimise.
 
@@ -104,13 +104,14 @@ class TrainLoss(nn.Module):
             real_inputs: optional [R, 30, T] corrupted real-track windows (self-reconstruction).
             real_targets: [R, 30, T] their clean windows.
             weight: factor of the synthetic batch's mean loss (:func:`retarget.distributed.shard_weight`).
+            ids: [B, 2, 3] the samples' triple ids.
 
         Returns:
             ``(terms, objective)``: the terms as logged (means of this batch), and
             ``weight * synthetic total + real term``.
         """
         cfg = self.config
-        losses = objective(self.net, inputs, targets, self.stats, cfg.loss)
+        losses = objective(self.net, inputs, targets, self.stats, cfg.loss, ids)
         minimise = losses["total"] if weight == 1.0 else weight * losses["total"]
         if real_inputs is not None and real_targets is not None:
             real = self_reconstruction(self.net, real_inputs, real_targets, self.stats, cfg.loss)
@@ -157,7 +158,7 @@ def train_step(
         noisy = corrupt_inputs(clipped, config.augment.noise_std, config.augment.drop_prob, generator)
         real_inputs, real_targets = joints_to_channels(noisy, stats), joints_to_channels(clipped, stats)
     with distributed.autocast(windows.device, dtype):
-        losses, minimise = loss_fn(inputs, targets, real_inputs, real_targets, weight)
+        losses, minimise = loss_fn(inputs, targets, real_inputs, real_targets, weight, batch["ids"])
     optimizer.zero_grad(set_to_none=True)
     minimise.backward()
     optimizer.step()
@@ -182,7 +183,7 @@ def evaluate(
         w, i = windows[start : start + batch_size].to(device), ids[start : start + batch_size].to(device)
         inputs, targets = batch_tensors(w, i, stats, config, torch.Generator(), augment=False)
         with distributed.autocast(device, dtype):
-            terms = objective(model, inputs, targets, stats, config.loss)
+            terms = objective(model, inputs, targets, stats, config.loss, i)
         for k, v in terms.items():
             sums[k] = sums.get(k, 0.0) + float(v) * len(w)
     return {k: v / len(windows) for k, v in sums.items()}

@@ -9,6 +9,7 @@ from retarget.losses import (
     ablation_config,
     foot_velocity,
     objective,
+    skeleton_cluster_loss,
     skeleton_ratio_loss,
     trajectory_error,
     used_combos,
@@ -125,6 +126,29 @@ def test_skeleton_ratio_is_scale_free_and_zero_once_anchors_are_near_their_own_c
     losses = objective(net, x, x, _stats(), LossConfig(skeleton_ratio_weight=1.0))
     assert "skeleton_ratio" in losses and float(losses["skeleton_ratio"].detach()) >= 0
     assert "skeleton_ratio" not in objective(net, x, x, _stats(), LossConfig())
+
+
+def test_skeleton_cluster_is_scale_free_and_takes_the_nearest_other_character():
+    # B=1 sample, 2 characters, K=2 windows each, D=2: character 0 around (0, 0), character 1 around (4, 0)
+    codes = torch.tensor([[[[-1.0, 0.0], [1.0, 0.0]], [[4.0, -1.0], [4.0, 1.0]]]])  # [1, 2, 2, 2]
+    chars = torch.tensor([[3, 5]])
+    # spread 1, nearest other centre 4: 1/4 - 0.5 < 0 for both
+    assert float(skeleton_cluster_loss(codes, chars, 0.5)) == 0.0
+    torch.testing.assert_close(skeleton_cluster_loss(codes, chars, 0.5), skeleton_cluster_loss(10 * codes, chars, 0.5))
+    torch.testing.assert_close(skeleton_cluster_loss(codes, chars, 0.1), torch.tensor(0.15))  # 1/4 - 0.1
+    # a second sample holds character 0 again, near character 1: not a negative of character 0, but of 1
+    again = torch.cat([codes, torch.tensor([[[[3.0, 0.0], [3.0, 0.0]], [[9.0, 0.0], [9.0, 0.0]]]])])  # [2, 2, 2, 2]
+    both = torch.tensor([[3, 5], [3, 7]])
+    # character 0 (twice): nearest others are 1 at 4 and 7 at 9 (first) or 6 (second); character 1: 1 from the
+    # second sample's character 0 at (3, 0)
+    expected = (max(1 / 4 - 0.1, 0) + max(1 / 1 - 0.1, 0) + 0.0 + 0.0) / 4
+    torch.testing.assert_close(skeleton_cluster_loss(again, both, 0.1), torch.tensor(expected))
+    net = RetargetNet().eval()
+    x = torch.randn(2, 8, 30, 32)
+    ids = torch.tensor([[[0, 1, 0], [1, 2, 1]], [[2, 3, 0], [3, 1, 1]]])
+    losses = objective(net, x, x, _stats(), LossConfig(skeleton_cluster_weight=1.0), ids)
+    assert "skeleton_cluster" in losses and float(losses["skeleton_cluster"].detach()) >= 0
+    assert "skeleton_cluster" not in objective(net, x, x, _stats(), LossConfig(skeleton_cluster_weight=1.0))
 
 
 def test_cycle_term_is_the_round_trip_through_the_next_windows_codes():
