@@ -136,11 +136,11 @@ def test_skeleton_cluster_is_scale_free_and_takes_the_nearest_other_character():
     assert float(skeleton_cluster_loss(codes, chars, 0.5)) == 0.0
     torch.testing.assert_close(skeleton_cluster_loss(codes, chars, 0.5), skeleton_cluster_loss(10 * codes, chars, 0.5))
     torch.testing.assert_close(skeleton_cluster_loss(codes, chars, 0.1), torch.tensor(0.15))  # 1/4 - 0.1
-    # a second sample holds character 0 again, near character 1: not a negative of character 0, but of 1
+    # a second sample holds character 3 again, at (3, 0), and character 7 at (9, 0): character 3 is not its own
+    # negative (its first centre's nearest other stays character 5 at 4), but character 5's nearest is now the
+    # second centre of character 3, 1 away; the second sample's codes have no spread
     again = torch.cat([codes, torch.tensor([[[[3.0, 0.0], [3.0, 0.0]], [[9.0, 0.0], [9.0, 0.0]]]])])  # [2, 2, 2, 2]
     both = torch.tensor([[3, 5], [3, 7]])
-    # character 0 (twice): nearest others are 1 at 4 and 7 at 9 (first) or 6 (second); character 1: 1 from the
-    # second sample's character 0 at (3, 0)
     expected = (max(1 / 4 - 0.1, 0) + max(1 / 1 - 0.1, 0) + 0.0 + 0.0) / 4
     torch.testing.assert_close(skeleton_cluster_loss(again, both, 0.1), torch.tensor(expected))
     net = RetargetNet().eval()
