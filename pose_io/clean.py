@@ -332,18 +332,18 @@ def resample_values(values: np.ndarray, fps: float, new_fps: float, frames: int 
     out = np.empty((n_out, *values.shape[1:]), dtype=np.float64)
     for start in range(0, n_out, _RESAMPLE_CHUNK):
         stop = min(start + _RESAMPLE_CHUNK, n_out)
-        src = _sources(start, stop, fps / new_fps, len(values))
-        lo = np.floor(src).astype(np.int64)
-        hi = np.minimum(lo + 1, len(values) - 1)
-        w = (src - lo).reshape(-1, *([1] * (values.ndim - 1)))
-        low = values[lo].astype(np.float64)
-        out[start:stop] = np.where(w == 0, low, (1 - w) * low + w * values[hi])  # input frames copied exactly
+        out[start:stop] = _lerp(values, _sources(start, stop, fps / new_fps, len(values)))
     return out
+
+
+def resampled_frames(n_in: int, fps: float, new_fps: float) -> int:
+    """Frames :func:`resample` gives by default: those covering ``n_in`` frames at ``fps`` at ``new_fps``."""
+    return math.floor((n_in - 1) * new_fps / fps + 1e-9) + 1
 
 
 def _output_frames(n_in: int, fps: float, new_fps: float, frames: int | None) -> int:
     """Frames of a resampled track (see :func:`resample`), checked against the frame limit."""
-    n_out = math.floor((n_in - 1) * new_fps / fps + 1e-9) + 1 if frames is None else frames
+    n_out = resampled_frames(n_in, fps, new_fps) if frames is None else frames
     if not isinstance(n_out, (int, np.integer)) or isinstance(n_out, bool) or n_out < 1:
         raise InputError(f"resampling to {n_out!r} frames: a whole number of at least 1 is needed")
     return check_frame_count(int(n_out), f"resampling {n_in} frames from {fps:g} to {new_fps:g} fps")
@@ -357,16 +357,19 @@ def _sources(start: int, stop: int, ratio: float, n_in: int) -> np.ndarray:
     return np.where(np.abs(src - near) < 1e-6, near, src)
 
 
+def _lerp(values: np.ndarray, src: np.ndarray) -> np.ndarray:
+    """[N, ...] float64 ``values`` [T, ...] at fractional frames ``src`` [N] (from :func:`_sources`): input frames
+    copied exactly, others interpolated linearly between their two neighbours."""
+    lo = np.floor(src).astype(np.int64)
+    hi = np.minimum(lo + 1, len(values) - 1)
+    w = (src - lo).reshape(-1, *([1] * (values.ndim - 1)))  # [N, 1, ...]
+    low = values[lo].astype(np.float64)
+    return np.where(w == 0, low, (1 - w) * low + w * values[hi])
+
+
 def _interpolate(track: PoseTrack, src: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joints [N, J, 2] and confidence [N, J] at fractional input frames ``src`` [N] (rules of :func:`resample`)."""
-    lo = np.clip(np.floor(src).astype(np.int64), 0, track.num_frames - 1)
-    hi = np.clip(lo + 1, 0, track.num_frames - 1)
-    w = (src - lo)[:, None]  # [N, 1]
-    exact = (w[:, 0] == 0)[:, None]
-    j_lo, j_hi = track.joints[lo].astype(np.float64), track.joints[hi].astype(np.float64)  # [N, J, 2]
-    c_lo, c_hi = track.confidence[lo].astype(np.float64), track.confidence[hi].astype(np.float64)  # [N, J]
-    joints = np.where(exact[..., None], j_lo, (1 - w[..., None]) * j_lo + w[..., None] * j_hi)
-    conf = np.where(exact, c_lo, (1 - w) * c_lo + w * c_hi)
+    joints, conf = _lerp(track.joints, src), _lerp(track.confidence, src)
     # NaN in either neighbour propagates through the weighted sum, so a half-missing pair stays missing.
     conf = np.where(np.isnan(joints[..., 0]), 0.0, conf)
     return joints.astype(np.float32), conf.astype(np.float32)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from pose_io.clean import resample, smooth_joints
+from pose_io.clean import resample, resampled_frames, smooth_joints
 from pose_io.errors import InputError
 from pose_io.limits import MAX_FPS, MIN_FPS, check_frame_count
 from pose_io.track import PoseTrack
@@ -301,19 +301,20 @@ class RetargeterBase:
         )  # fmt: skip
         return [self._finish(y, m, reference, scale) for y, m in zip(outputs, motions)]
 
-    def _network_rate(self, track: PoseTrack, name: str) -> float:
-        """The frame rate ``track`` goes through the network at: ``config.fps``, or its own within
-        ``FPS_TOLERANCE`` of it (or with ``config.fps`` 0).
+    def _network_rate(self, track: PoseTrack, name: str, target: float | None = None) -> float:
+        """The frame rate ``track`` goes through the network at: ``target`` (default ``config.fps``), or its own
+        within ``FPS_TOLERANCE`` of it (or with a target of 0).
 
         Raises:
             InputError: too few or too many frames at that rate.
         """
-        fps, target = track.fps, self.config.fps
+        fps = track.fps
+        target = self.config.fps if target is None else target
         rate = fps if not target or abs(fps / target - 1) <= FPS_TOLERANCE else target
         if rate == fps:
             frames, what, at = len(track), f"{name}: {len(track)} frames", ""
         else:
-            frames = math.floor((len(track) - 1) * rate / fps + 1e-9) + 1  # pose_io.clean.resample's count
+            frames = resampled_frames(len(track), fps, rate)
             check_frame_count(frames, f"{name}: {len(track)} frames at {fps:g} fps, at the network's {rate:g} fps")
             what = f"{name}: {len(track)} frames at {fps:g} fps, {frames} at the network's {rate:g} fps"
             at = " at that rate"
@@ -379,14 +380,10 @@ class RetargeterBase:
         self, track: PoseTrack, name: str, rate: float | None = None
     ) -> tuple[np.ndarray, float, np.ndarray]:
         """The network input [30, T'] float32 of a real track at ``rate`` (from :meth:`_network_rate`; None =
-        its own, checked here), the scale to the canvas and its body15 joints [T, 15, 2] in its own pixels and
-        frames (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
+        its own), the scale to the canvas and its body15 joints [T, 15, 2] in its own pixels and frames
+        (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
         if rate is None:
-            rate = track.fps
-            if len(track) < self.min_frames:
-                raise InputError(
-                    f"{name}: {len(track)} frames; the retargeting network needs at least {self.min_frames}"
-                )
+            rate = self._network_rate(track, name, target=0.0)  # its own rate, its length checked
         prepared = prepare(track, self.preprocess, name, fps=rate)
         # [30, T] float32, a view of [T, 30] (worked out in the canvas' memory, nothing else uses it), kept
         # time-major: windows are cut and run that way (retarget.windows)
