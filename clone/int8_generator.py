@@ -61,7 +61,7 @@ class QuantConfig:
 
 def generator_cache_dir() -> Path:
     """``~/.cache/clone2d/generators``: beside the motion world's cache, under the same root."""
-    from retarget.world.dataset import default_cache_dir
+    from retarget.world.config import default_cache_dir
 
     return default_cache_dir().parent / "generators"
 

@@ -12,8 +12,9 @@ from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progres
 from retarget.evaluate.references3d import REFERENCE_FUNCTIONS
 from retarget.evaluate.scores import CaseScores, case_scores, summarise
 from retarget.preprocess import body15_track
-from retarget.world.dataset import WindowLabel, WorldSplit, window_starts
+from retarget.windows import strided_starts
 from retarget.world.skeleton import Motion3D, Skeleton, joint_index, retarget_3d
+from retarget.world.split import WindowLabel, WorldSplit
 
 _WORLD_ROOT = joint_index("mid_hip")
 
@@ -53,7 +54,7 @@ class ClipMotions:
         self._replays = [[retarget_3d(m, c).positions for c in characters] for m in motions]
         labels, index = [], []
         for k, m in enumerate(motions):
-            for start in window_starts(m.num_frames, window, stride):
+            for start in strided_starts(m.num_frames, window, stride):
                 labels.append(WindowLabel(m.name, m.source, start, f"extra:{m.source or m.name}", m.num_frames))
                 index.append((k, start))
         self.window_labels: tuple[WindowLabel, ...] = tuple(labels)

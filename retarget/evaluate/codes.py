@@ -11,7 +11,7 @@ import torch
 from pose_io.errors import InputError
 from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig
 from retarget.preprocess import body15_track, joints_to_channels, prepare_track
-from retarget.world.dataset import WorldSplit
+from retarget.world.split import WorldSplit
 
 _LABEL_NAMES = {"motion": "motion", "body": "character", "view": "view"}
 

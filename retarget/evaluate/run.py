@@ -22,7 +22,7 @@ from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progres
 from retarget.evaluate.real import real_pair_results
 from retarget.evaluate.references3d import REFERENCES_3D
 from retarget.evaluate.report import markdown_report, report_notes
-from retarget.world.dataset import WorldSplit
+from retarget.world.split import WorldSplit
 
 log = logging.getLogger(__name__)
 

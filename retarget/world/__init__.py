@@ -20,7 +20,8 @@ from retarget.world.camera import (
     ground_origin,
     project,
 )
-from retarget.world.dataset import MotionWorld, WindowLabel, WorldSplit, default_cache_dir
+from retarget.world.config import default_cache_dir
+from retarget.world.dataset import MotionWorld
 from retarget.world.rigs import RIGS, load_motion
 from retarget.world.skeleton import (
     BONES,
@@ -33,6 +34,7 @@ from retarget.world.skeleton import (
     sample_skeleton,
     skeleton_of,
 )
+from retarget.world.split import WindowLabel, WorldSplit
 
 __all__ = [
     "BONES",

@@ -122,7 +122,7 @@ def test_the_library_registries_match_the_enums():
     """The enums are built from light modules; the registries that interpret them must hold the same names."""
     from clone import canvas, drive
     from retarget import losses, model
-    from retarget.world.dataset import SPLITS
+    from retarget.world.config import SPLITS
 
     assert set(values(choices.Split)) < set(SPLITS)
     assert list(model.VARIANTS) == values(model.Variant) and list(losses.ABLATIONS) == values(losses.Ablation)

@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 from pose_io import atomic
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
+from retarget.windows import strided_starts
 from retarget.world import (
     MAX_PITCH,
     NAMED_CHARACTERS,
@@ -22,8 +23,8 @@ from retarget.world import (
     facing_angle,
     project,
 )
-from retarget.world import dataset as dataset_module
-from retarget.world.dataset import assign_splits, motion_group, window_starts
+from retarget.world import build as build_module
+from retarget.world.build import assign_splits, motion_group
 from tests.retarget.world.humanoid import write_clip
 
 J = WORLD_JOINTS.index
@@ -136,7 +137,7 @@ def test_second_build_comes_from_the_cache(
     def no_loading(*args: object, **kwargs: object) -> None:
         raise AssertionError("the cache was not used")
 
-    monkeypatch.setattr(dataset_module, "load_motion", no_loading)
+    monkeypatch.setattr(build_module, "load_motion", no_loading)
     again = MotionWorld.build(tiny_mocap, tiny_world.path.parent, **SMALL)
     assert again.path == tiny_world.path
     np.testing.assert_array_equal(again.split("val").window(0, 0, 3), tiny_world.split("val").window(0, 0, 3))
@@ -187,9 +188,9 @@ def test_build_errors(tmp_path: Path) -> None:
 def test_motion_groups_and_split_assignment() -> None:
     assert motion_group("cmu/01_01.bvh.gz") == motion_group("x/01_01.amc") == motion_group("002/001_01.bvh") == "cmu:1_1"
     assert motion_group("b/dataset-2_walk_normal_002.bvh.gz") == "dataset-2_walk_normal"
-    assert window_starts(100, 64, 32) == [0, 32, 36]
-    assert window_starts(96, 64, 32) == [0, 32] and window_starts(50, 64, 32) == []
-    from retarget.world.dataset import WorldConfig
+    assert strided_starts(100, 64, 32) == [0, 32, 36]
+    assert strided_starts(96, 64, 32) == [0, 32] and strided_starts(50, 64, 32) == []
+    from retarget.world.config import WorldConfig
 
     groups = [f"g{k}" for k in range(20)] + ["g0"]
     sources = ["a"] * 21
