@@ -14,7 +14,14 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Align, CanvasMode, Method, StageMode
-from clone.cli.common import DEVICE_HELP, console, resolve_device_option, training_device, user_errors
+from clone.cli.common import (
+    DEVICE_HELP,
+    MAX_THREADS,
+    console,
+    resolve_device_option,
+    training_device,
+    user_errors,
+)
 from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
@@ -25,7 +32,6 @@ MIN_SIZE, MAX_SIZE = 32, 1024
 MAX_STEPS = 10_000_000
 MAX_MINUTES = 7 * 24 * 60.0
 MAX_BATCH = 4096
-MAX_THREADS = 1024
 MAX_GAP = 100_000
 
 

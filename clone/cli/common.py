@@ -92,6 +92,7 @@ def setup_logging(verbose: bool) -> None:
 
 # --device is free text (cuda:N), not a choice: resolve_device_option checks it.
 DEVICE_HELP = "auto | cpu | cuda | cuda:N"
+MAX_THREADS = 1024  # --threads of every command
 
 
 def training_device(spec: str, threads: int | None = None):  # -> torch.device
