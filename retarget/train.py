@@ -14,7 +14,15 @@ from retarget.training.data import (
     real_windows,
     split_statistics,
 )
-from retarget.training.loop import CPU, DEFAULT_EPOCHS, ProgressFn, TrainProgress, TrainSummary, fit
+from retarget.training.loop import (
+    CPU,
+    DEFAULT_EPOCHS,
+    ProgressFn,
+    TrainProgress,
+    TrainSummary,
+    fit,
+    retargeting_error,
+)
 from retarget.training.run import read_real_tracks, train
 from retarget.training.step import TrainLoss, batch_tensors, evaluate, part_tensors, train_step
 
@@ -37,6 +45,7 @@ __all__ = [
     "part_tensors",
     "read_real_tracks",
     "real_windows",
+    "retargeting_error",
     "split_statistics",
     "train",
     "train_step",

@@ -33,6 +33,12 @@ def train(
         int | None, typer.Option("--epochs", min=1, help="Total epochs (default 300 without --minutes).")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run stored in --out.")] = False,
+    best: Annotated[
+        Path | None,
+        typer.Option("--best", help="Also keep the weights of the epoch with the lowest validation retargeting "
+                     "error (cross reconstruction plus root path) in this file, rewritten whenever an epoch beats "
+                     "the run's earlier ones."),
+    ] = None,
     variant: Annotated[
         Variant, typer.Option("--variant", parser=Variant, help="Network: three encoders, or without view or body.")
     ] = Variant.FULL,
@@ -128,6 +134,10 @@ def train(
     check_output(out, "--out", overwrite=True)  # rewritten after every epoch; --resume continues it
     if out.exists() and not resume:
         raise InputError(f"--out {out}: already exists; pass --resume to continue it or choose another --out")
+    if best is not None:
+        check_output(best, "--best", overwrite=resume)  # a resumed run goes on improving it
+        if best.resolve() == out.resolve():
+            raise InputError(f"--best {best}: is --out; choose another file")
     check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
     check_number("--epochs", epochs, 1, MAX_EPOCHS)
     check_number("--batch-size", batch_size, 1, MAX_BATCH)
@@ -170,8 +180,14 @@ def train(
         summary = run_training(
             mocap, out, cache_dir=cache, real_dir=real, config=config, device=dev, epochs=epochs,
             minutes=minutes, resume=resume, num_workers=workers, init=init, progress=update, amp=amp,
+            best=best,
         )
         main = distributed.current().is_main
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
     if main:
         console.print(f"wrote {summary.checkpoint} ({summary.epochs} epochs, {summary.steps} steps; {why})")
+        if best is not None and summary.best_epoch is not None:
+            console.print(f"wrote {best}: the weights of epoch {summary.best_epoch}, the lowest validation "
+                          "retargeting error of the run")
+        elif best is not None:
+            console.print(f"--best {best}: no epoch of this call beat the run's earlier ones; not written")

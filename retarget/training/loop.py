@@ -73,6 +73,8 @@ class TrainSummary:
         steps: optimisation steps (in total).
         stopped: "epochs" (all done) or "time" (budget used up).
         history: one dict per completed epoch (train and validation loss means, seconds).
+        best_epoch: the epoch (from 1) whose weights ``best`` holds; None without ``best`` or when no epoch of
+            this call beat the run's earlier ones.
     """
 
     checkpoint: Path
@@ -80,6 +82,23 @@ class TrainSummary:
     steps: int
     stopped: str
     history: list[dict[str, float]]
+    best_epoch: int | None = None
+
+
+def retargeting_error(record: dict[str, float], config: TrainConfig) -> float | None:
+    """An epoch's validation retargeting error: the cross reconstruction loss (the reconstruction loss when the
+    objective has none) plus the root-path loss, unweighted, when it is trained. None without validation.
+
+    The root path is what moves most from epoch to epoch; on the validation split's eval cases it follows
+    ``clone retarget eval``'s with-root error (see the model card).
+    """
+    loss = config.loss
+    pose = record.get("val_cross") if loss.cross else record.get("val_rec")
+    if pose is None:
+        return None
+    if loss.trajectory_weight > 0 and "val_trajectory" in record:
+        pose += record["val_trajectory"] / loss.trajectory_weight
+    return float(pose)
 
 
 def fit(
@@ -96,6 +115,7 @@ def fit(
     progress: ProgressFn | None = None,
     init: RetargetWeights | None = None,
     amp: bool | None = None,
+    best: str | Path | None = None,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
 
@@ -118,6 +138,8 @@ def fit(
         init: weights to start from (ours or the authors'; their statistics are kept, since the
             weights are tied to them); ignored with ``resume``.
         amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
+        best: also write the weights (no training state) of every epoch whose :func:`retargeting_error` on
+            validation is the lowest of the run so far (resumed runs included) to this file.
 
     Returns:
         A :class:`TrainSummary` (the same on every process).
@@ -209,6 +231,9 @@ def fit(
             progress(update)
 
     stopped = "epochs"
+    best_epoch = None
+    scores = [retargeting_error(r, config) for r in history]
+    lowest = min((v for v in scores if v is not None), default=math.inf)
     while epoch < target_epochs:
         dataset.epoch = epoch
         sums: dict[str, float] = {}
@@ -253,13 +278,20 @@ def fit(
         record = distributed.broadcast(record)  # rank 0 validated
         history.append(record)
         save()
+        score = retargeting_error(record, config)
+        if best is not None and score is not None and score < lowest:
+            lowest, best_epoch = score, epoch
+            if world.is_main:
+                save_checkpoint(best, model, stats, preprocess)
+                log.info("epoch %d: lowest validation retargeting error so far (%.4f); weights in %s", epoch, score, best)
+            distributed.barrier()
         report(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
         if world.is_main:
             log.info("epoch %d: %s", epoch, _format(record))
         if distributed.any_rank(time.monotonic() > deadline):
             stopped = "time" if epoch < target_epochs else "epochs"
             break
-    return TrainSummary(out, epoch, global_step, stopped, history)
+    return TrainSummary(out, epoch, global_step, stopped, history, best_epoch)
 
 
 def _require_new(out: Path) -> None:

@@ -49,6 +49,7 @@ def train(
     progress: ProgressFn | None = None,
     init: str | Path | None = None,
     amp: bool | None = None,
+    best: str | Path | None = None,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
 
@@ -69,6 +70,7 @@ def train(
         progress: callback (see :func:`fit`).
         init: checkpoint to start from: ours, or the authors' ``pretrained_*.pth`` with its statistics.
         amp: bfloat16 autocast on CUDA (see :func:`fit`).
+        best: file for the weights of the epoch with the lowest validation retargeting error (see :func:`fit`).
     """
     from retarget.world import MotionWorld
 
@@ -84,5 +86,5 @@ def train(
                                   extra_spread=config.extra_spread)  # fmt: skip
     return fit(
         world.split("train"), world.split("val"), out, config, device, real, epochs, minutes, resume,
-        num_workers=num_workers, progress=progress, init=start, amp=amp,
+        num_workers=num_workers, progress=progress, init=start, amp=amp, best=best,
     )

@@ -106,3 +106,10 @@ def test_train_errors_are_one_line(tmp_path):
     result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path / "none"),
                                  "--out", str(tmp_path / "n.pt"), "--device", "cpu"])
     assert result.exit_code == 2 and "no such folder" in result.output
+    result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path), "--out", str(tmp_path / "n.pt"),
+                                 "--best", str(out)])
+    assert result.exit_code == 2 and "--best" in result.output and "exists" in result.output
+    assert out.read_bytes() == b""  # untouched
+    result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path), "--out", str(tmp_path / "n.pt"),
+                                 "--best", str(tmp_path / "n.pt")])
+    assert result.exit_code == 2 and "is --out" in result.output

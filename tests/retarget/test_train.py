@@ -1,3 +1,4 @@
+import dataclasses
 import shutil
 
 import numpy as np
@@ -18,6 +19,7 @@ from retarget.train import (
     character_heights,
     fit,
     mean_pose_height,
+    retargeting_error,
     split_statistics,
     train,
     train_step,
@@ -153,6 +155,41 @@ def test_resume_continues_exactly(tmp_path):
         torch.testing.assert_close(parts[key], whole[key], rtol=0, atol=0)
 
 
+def test_best_keeps_the_weights_of_the_epoch_with_the_lowest_validation_error(tmp_path):
+    split, val = FakeSplit(), FakeSplit(seed=1)
+    config = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, trajectory_weight=0.5))
+    summary = fit(split, val, tmp_path / "r.pt", config, epochs=5, best=tmp_path / "best.pt")
+    errors = [retargeting_error(r, config) for r in summary.history]
+    assert summary.best_epoch == int(np.argmin(errors)) + 1
+    best = load_checkpoint(tmp_path / "best.pt")
+    assert best.training is None  # weights only
+    fit(split, val, tmp_path / "short.pt", config, epochs=summary.best_epoch)  # the same run, stopped there
+    same = _weights(tmp_path / "short.pt")
+    for key, value in best.model.state_dict().items():
+        torch.testing.assert_close(value, same[key], rtol=0, atol=0)
+    # Resumed, an epoch is kept only when it beats every earlier one of the run.
+    fit(split, val, tmp_path / "parts.pt", config, epochs=2, best=tmp_path / "b2.pt")
+    rest = fit(split, val, tmp_path / "parts.pt", config, epochs=5, resume=True, best=tmp_path / "b2.pt")
+    assert [retargeting_error(r, config) for r in rest.history] == errors
+    assert rest.best_epoch == (summary.best_epoch if summary.best_epoch > 2 else None)
+    kept = load_checkpoint(tmp_path / "b2.pt").model.state_dict()
+    for key, value in best.model.state_dict().items():
+        torch.testing.assert_close(kept[key], value, rtol=0, atol=0)
+    # No validation split: nothing to choose by.
+    alone = fit(split, None, tmp_path / "alone.pt", config, epochs=1, best=tmp_path / "b3.pt")
+    assert alone.best_epoch is None and not (tmp_path / "b3.pt").exists()
+
+
+def test_retargeting_error_is_cross_reconstruction_plus_the_unweighted_root_path():
+    record = {"val_rec": 0.2, "val_cross": 0.5, "val_trajectory": 0.03}
+    with_path = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, trajectory_weight=0.1))
+    assert retargeting_error(record, with_path) == pytest.approx(0.8)
+    assert retargeting_error(record, TINY) == pytest.approx(0.5)  # the root path is not trained
+    no_cross = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, cross=False))
+    assert retargeting_error(record, no_cross) == pytest.approx(0.2)
+    assert retargeting_error({"train_cross": 0.5}, TINY) is None
+
+
 def test_fit_refuses_to_overwrite_or_to_resume_other_settings(tmp_path):
     split = FakeSplit()
     fit(split, None, tmp_path / "r.pt", TINY, epochs=1)
@@ -211,9 +248,11 @@ def test_train_on_a_motion_world_built_from_mocap(shared_dir, tmp_path):
     for name in ("dataset-1/dataset-1_walk_normal_001", "dataset-1/dataset-1_bow_normal_001",
                  "dataset-2/dataset-2_walk_normal_001", "dataset-2/dataset-2_walk_normal_002"):
         shutil.copy(shared_dir / "mocap" / "bandai_namco" / f"{name}.bvh.gz", mocap)
-    summary = train(mocap, tmp_path / "r.pt", cache_dir=tmp_path / "cache", config=TINY, epochs=1)
+    summary = train(mocap, tmp_path / "r.pt", cache_dir=tmp_path / "cache", config=TINY, epochs=1,
+                    best=tmp_path / "best.pt")
     assert summary.epochs == 1 and "val_cross" in summary.history[0]
     assert load_checkpoint(tmp_path / "r.pt").training["epoch"] == 1
+    assert summary.best_epoch == 1 and load_checkpoint(tmp_path / "best.pt").training is None
 
 
 def test_real_tracks_are_read_from_openpose_folders(shared_dir, tmp_path):
