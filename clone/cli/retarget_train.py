@@ -39,6 +39,14 @@ def train(
                      "error (cross reconstruction plus root path) in this file, rewritten whenever an epoch beats "
                      "the run's earlier ones."),
     ] = None,
+    average: Annotated[
+        Path | None,
+        typer.Option("--average", help="Also write the mean of the weights at the end of every epoch from "
+                     "--average-from on to this file (rewritten after every epoch; kept in --out for --resume)."),
+    ] = None,
+    average_from: Annotated[
+        int, typer.Option("--average-from", min=1, help="First epoch (over resumed runs) in --average.")
+    ] = 1,
     variant: Annotated[
         Variant, typer.Option("--variant", parser=Variant, help="Network: three encoders, or without view or body.")
     ] = Variant.FULL,
@@ -138,6 +146,11 @@ def train(
         check_output(best, "--best", overwrite=resume)  # a resumed run goes on improving it
         if best.resolve() == out.resolve():
             raise InputError(f"--best {best}: is --out; choose another file")
+    if average is not None:
+        check_output(average, "--average", overwrite=resume)
+        if average.resolve() in {out.resolve(), best.resolve() if best is not None else None}:
+            raise InputError(f"--average {average}: is --out or --best; choose another file")
+    check_number("--average-from", average_from, 1, MAX_EPOCHS)
     check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
     check_number("--epochs", epochs, 1, MAX_EPOCHS)
     check_number("--batch-size", batch_size, 1, MAX_BATCH)
@@ -180,7 +193,7 @@ def train(
         summary = run_training(
             mocap, out, cache_dir=cache, real_dir=real, config=config, device=dev, epochs=epochs,
             minutes=minutes, resume=resume, num_workers=workers, init=init, progress=update, amp=amp,
-            best=best,
+            best=best, average=average, average_from=average_from,
         )
         main = distributed.current().is_main
     why = "time budget used up" if summary.stopped == "time" else "all epochs done"
@@ -191,3 +204,7 @@ def train(
                           "retargeting error of the run")
         elif best is not None:
             console.print(f"--best {best}: no epoch of this call beat the run's earlier ones; not written")
+        if average is not None and summary.averaged_epochs:
+            console.print(f"wrote {average}: the mean of the weights of epochs {average_from}-{summary.epochs}")
+        elif average is not None:
+            console.print(f"--average {average}: no epoch from {average_from} on yet; not written")

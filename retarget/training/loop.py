@@ -20,6 +20,7 @@ from pose_io.track import PoseTrack
 from retarget import distributed
 from retarget.checkpoint import RetargetWeights, load_checkpoint, save_checkpoint
 from retarget.model import RetargetNet, variant_config
+from retarget.training.average import WeightAverage
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
 from retarget.training.data import (
     CrossSamples,
@@ -75,6 +76,7 @@ class TrainSummary:
         history: one dict per completed epoch (train and validation loss means, seconds).
         best_epoch: the epoch (from 1) whose weights ``best`` holds; None without ``best`` or when no epoch of
             this call beat the run's earlier ones.
+        averaged_epochs: epochs in the weight average ``average`` holds (0 without it).
     """
 
     checkpoint: Path
@@ -83,6 +85,7 @@ class TrainSummary:
     stopped: str
     history: list[dict[str, float]]
     best_epoch: int | None = None
+    averaged_epochs: int = 0
 
 
 def retargeting_error(record: dict[str, float], config: TrainConfig) -> float | None:
@@ -116,6 +119,8 @@ def fit(
     init: RetargetWeights | None = None,
     amp: bool | None = None,
     best: str | Path | None = None,
+    average: str | Path | None = None,
+    average_from: int = 1,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
 
@@ -140,6 +145,9 @@ def fit(
         amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
         best: also write the weights (no training state) of every epoch whose :func:`retargeting_error` on
             validation is the lowest of the run so far (resumed runs included) to this file.
+        average: also write the mean of the weights at the end of every epoch from ``average_from`` on
+            (:class:`WeightAverage`, kept in ``out`` for resuming) to this file, rewritten after every epoch.
+        average_from: the first epoch (from 1, over resumed runs) in the mean.
 
     Returns:
         A :class:`TrainSummary` (the same on every process).
@@ -199,6 +207,12 @@ def fit(
         real_rng.bit_generator.state = training["real_rng"]
     done = training or {}
     epoch: int = done.get("epoch", 0)
+    averager = None
+    if average is not None:
+        if done.get("average") is None and epoch >= average_from:
+            raise InputError(f"the weight average starts at epoch {average_from}, but this run has done {epoch} "
+                             "epochs without one; start it later")
+        averager = WeightAverage(average_from, done.get("average"))
     step_in_epoch: int = done.get("step", 0)
     global_step: int = done.get("global_step", 0)
     elapsed_before: float = done.get("elapsed_s", 0.0)
@@ -223,6 +237,7 @@ def fit(
                 "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
                 "real_rng": real_rng.bit_generator.state,
                 "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
+                **({"average": averager.state()} if averager is not None else {}),
             })
         distributed.barrier()
 
@@ -277,7 +292,10 @@ def fit(
         record["seconds"] = elapsed_before + time.monotonic() - started
         record = distributed.broadcast(record)  # rank 0 validated
         history.append(record)
+        averaged = averager is not None and averager.update(epoch, model)
         save()
+        if averaged and world.is_main:
+            save_checkpoint(average, averager.module(model), stats, preprocess)
         score = retargeting_error(record, config)
         if best is not None and score is not None and score < lowest:
             lowest, best_epoch = score, epoch
@@ -291,7 +309,8 @@ def fit(
         if distributed.any_rank(time.monotonic() > deadline):
             stopped = "time" if epoch < target_epochs else "epochs"
             break
-    return TrainSummary(out, epoch, global_step, stopped, history, best_epoch)
+    return TrainSummary(out, epoch, global_step, stopped, history, best_epoch,
+                        averager.count if averager is not None else 0)
 
 
 def _require_new(out: Path) -> None:

@@ -50,6 +50,8 @@ def train(
     init: str | Path | None = None,
     amp: bool | None = None,
     best: str | Path | None = None,
+    average: str | Path | None = None,
+    average_from: int = 1,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
 
@@ -71,6 +73,7 @@ def train(
         init: checkpoint to start from: ours, or the authors' ``pretrained_*.pth`` with its statistics.
         amp: bfloat16 autocast on CUDA (see :func:`fit`).
         best: file for the weights of the epoch with the lowest validation retargeting error (see :func:`fit`).
+        average, average_from: file for the mean of the weights from that epoch on (see :func:`fit`).
     """
     from retarget.world import MotionWorld
 
@@ -87,4 +90,5 @@ def train(
     return fit(
         world.split("train"), world.split("val"), out, config, device, real, epochs, minutes, resume,
         num_workers=num_workers, progress=progress, init=start, amp=amp, best=best,
+        average=average, average_from=average_from,
     )

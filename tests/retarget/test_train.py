@@ -180,6 +180,33 @@ def test_best_keeps_the_weights_of_the_epoch_with_the_lowest_validation_error(tm
     assert alone.best_epoch is None and not (tmp_path / "b3.pt").exists()
 
 
+def test_average_is_the_mean_of_the_weights_of_the_chosen_epochs_across_resumes(tmp_path):
+    split, val = FakeSplit(), FakeSplit(seed=1)
+    whole = fit(split, val, tmp_path / "whole.pt", TINY, epochs=4, average=tmp_path / "mean.pt", average_from=2)
+    assert whole.averaged_epochs == 3
+    ends = []
+    for epochs in (1, 2, 3, 4):  # the same run, one epoch per call
+        fit(split, val, tmp_path / "parts.pt", TINY, epochs=epochs, resume=epochs > 1,
+            average=tmp_path / "parts_mean.pt", average_from=2)
+        ends.append(_weights(tmp_path / "parts.pt"))
+    mean, parts_mean = _weights(tmp_path / "mean.pt"), _weights(tmp_path / "parts_mean.pt")
+    for key, value in mean.items():
+        expected = sum(end[key].double() for end in ends[1:]) / 3
+        torch.testing.assert_close(value.double(), expected, rtol=0, atol=1e-6)
+        torch.testing.assert_close(parts_mean[key], value, rtol=0, atol=0)
+    assert not torch.equal(mean["motion_encoder.layers.0.weight"], ends[-1]["motion_encoder.layers.0.weight"])
+    assert load_checkpoint(tmp_path / "mean.pt").training is None
+    # A run that went past the first averaged epoch without averaging cannot start now.
+    fit(split, val, tmp_path / "plain.pt", TINY, epochs=2)
+    with pytest.raises(InputError, match="start it later"):
+        fit(split, val, tmp_path / "plain.pt", TINY, epochs=5, resume=True, average=tmp_path / "m2.pt", average_from=2)
+    fit(split, val, tmp_path / "plain.pt", TINY, epochs=3, resume=True, average=tmp_path / "m2.pt", average_from=3)
+    torch.testing.assert_close(_weights(tmp_path / "m2.pt"), _weights(tmp_path / "plain.pt"), rtol=0, atol=0)
+    with pytest.raises(InputError, match="from epoch 2; resume with that"):
+        fit(split, val, tmp_path / "parts.pt", TINY, epochs=5, resume=True, average=tmp_path / "m2.pt",
+            average_from=3)
+
+
 def test_retargeting_error_is_cross_reconstruction_plus_the_unweighted_root_path():
     record = {"val_rec": 0.2, "val_cross": 0.5, "val_trajectory": 0.03}
     with_path = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, trajectory_weight=0.1))
