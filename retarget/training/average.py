@@ -1,8 +1,9 @@
 """A running mean of a network's weights over the ends of epochs (what stochastic weight averaging keeps).
 
 From one epoch to the next the weights wander around a good region and the root path, which the loss constrains
-least, moves most with them; their mean over the late epochs of a run sits nearer its middle (see the model
-card: the mean of epochs 20-50 of a fine-tuning run beat every single epoch but one on validation).
+least, moves most with them; their mean over the late epochs of a run sits nearer its middle. In the fourth
+fine-tuning run of the model card, the mean of epochs 20-66 had a lower validation pose error than every single
+epoch measured but the best one, and a lower pose error on demo-like cloning pairs than every single epoch measured.
 """
 
 from __future__ import annotations
