@@ -25,18 +25,15 @@ from pose_io.errors import InputError
 from pose_io.limits import MAX_FPS, MIN_FPS, check_frame_count
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
+from retarget.placement import Placement, placement_of, placement_shift, shifted
 from retarget.preprocess import (
     LAYOUT,
     NormStats,
-    Placement,
     PreprocessConfig,
     canvas_scale,
     channels_to_joints,
     joints_to_channels,
-    placement_of,
-    placement_shift,
     prepare,
-    shifted,
 )
 from retarget.windows import pad_to_multiple, run_windowed, strided_starts
 

@@ -40,7 +40,8 @@ from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter, _pad_to_multiple
-from retarget.preprocess import LAYOUT, channels_to_joints, place
+from retarget.placement import place
+from retarget.preprocess import LAYOUT, channels_to_joints
 
 log = logging.getLogger(__name__)
 

@@ -18,11 +18,8 @@ shares them: this module does not import torch unless it is handed a tensor.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import sys
-import warnings
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -31,7 +28,7 @@ import numpy as np
 from pose_io.clean import drop_outlier_joints, hold_fill, resample_values, smooth_joints
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, convert_joints, get_layout, require_convertible
-from pose_io.measures import foot_points, median_of, skeleton_height, skeleton_heights
+from pose_io.measures import skeleton_height
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:
@@ -65,7 +62,7 @@ def _runs(index: tuple[int, ...]) -> tuple[tuple[slice, slice], ...]:
 _LOCAL_RUNS = _runs(LOCAL_INDEX)
 
 
-def _points(a: np.ndarray) -> np.ndarray | None:
+def complex_points(a: np.ndarray) -> np.ndarray | None:
     """[..., 2] float32/64 coordinates as [...] complex ``x + iy`` (a view), or None where memory or dtype forbid.
 
     numpy adds and subtracts complex numbers part by part, so a sum of such views is the sums of the
@@ -177,7 +174,7 @@ def _rows(joints: Array) -> Array:
     # The same differences written into one time-major array, run of joints by run of joints (a gather would be
     # one more copy), as points where possible, else a coordinate at a time: the same numbers.
     rows = np.empty((*joints.shape[:2], NUM_ROWS, 2), dtype=np.result_type(joints, root))  # [B, T, 15, 2]
-    points, out = _points(joints), _points(rows)  # [B, T, 15] complex views
+    points, out = complex_points(joints), complex_points(rows)  # [B, T, 15] complex views
     if points is not None and out is not None:
         origin = points[:, :, ROOT_INDEX, None]  # [B, T, 1]
         for in_rows, in_joints in _LOCAL_RUNS:
@@ -202,7 +199,7 @@ def _rows_in_place(joints: Array) -> np.ndarray | None:
     """
     if _is_tensor(joints) or not joints.flags.c_contiguous or not joints.flags.writeable:
         return None
-    points = _points(joints)  # [B, T, 15]
+    points = complex_points(joints)  # [B, T, 15]
     if points is None:
         return None
     origin = points[:, :, ROOT_INDEX].copy()  # [B, T]
@@ -310,10 +307,10 @@ def channels_to_joints(
     root = np.cumsum(rows[:, :, -1], axis=1)  # [B, T, 2]
     if start is not None:
         root = root + np.asarray(start, dtype=work).reshape(-1, 1, 2)
-    if _points(rows) is not None and _points(root) is not None:  # rows is ours: x's memory, or fresh
+    if complex_points(rows) is not None and complex_points(root) is not None:  # rows is ours: x's memory, or fresh
         # Rows become joints where they lie: row r goes to joint LOCAL_INDEX[r] >= r, so going down from the
         # last row each one is read before anything is written over it (a run that moves, one row at a time).
-        points, origin = _points(rows), _points(root)  # [B, T, 15], [B, T]
+        points, origin = complex_points(rows), complex_points(root)  # [B, T, 15], [B, T]
         for in_rows, in_joints in reversed(_LOCAL_RUNS):
             if in_rows == in_joints:
                 np.add(points[:, :, in_rows], origin[:, :, None], out=points[:, :, in_joints])
@@ -501,89 +498,3 @@ def _scale(image_size: tuple[int, int], config: PreprocessConfig, body15: np.nda
 def body15_track(joints: np.ndarray, fps: float, image_size: tuple[int, int]) -> PoseTrack:
     """A synthesised body15 track: [T, 15, 2] pixels, every joint present (confidence 1)."""
     return PoseTrack.complete(joints, fps, image_size, LAYOUT.name)
-
-
-# ---------------------------------------------------------------------------------------------------------
-# Where a person stands: height, root position, ground line.
-
-
-@dataclass(frozen=True)
-class Placement:
-    """Where a person stands in their video, in that video's pixels.
-
-    Attributes:
-        height: skeleton height (:func:`pose_io.measures.skeleton_height`).
-        root_x: median x of the root (MidHip).
-        ground_y: median y of the lower ankle.
-    """
-
-    height: float
-    root_x: float
-    ground_y: float
-
-
-def placement_of(joints: np.ndarray, name: str = "track") -> Placement:
-    """Placement statistics of [T, 15, 2] body15 joints (NaN allowed).
-
-    Raises:
-        InputError: the root or both ankles are never seen, or a bone of the height never is.
-    """
-    height = float(skeleton_heights(np.asarray(joints, dtype=np.float64)[None], LAYOUT)[0])
-    root_x, ground_y = _stand(joints)
-    if not all(np.isfinite(v) for v in (height, root_x, ground_y)):
-        raise InputError(f"{name}: cannot tell where the person stands (root or ankles never detected)")
-    return Placement(height, root_x, ground_y)
-
-
-def _stand(joints: np.ndarray) -> tuple[float, float]:
-    """(median root x, median ground line) of [T, 15, 2] body15 joints (NaN allowed; NaN when never seen)."""
-    root, ground = joints[:, ROOT_INDEX, 0], foot_points(joints, LAYOUT)[:, 1]
-    if not (np.isnan(root).any() or np.isnan(ground).any()):  # the same medians, without nanmedian's overhead
-        return float(median_of(root)), float(median_of(ground))
-    with _quiet_nan():
-        return float(np.nanmedian(root)), float(np.nanmedian(ground))
-
-
-def place(joints: np.ndarray, target: Placement) -> np.ndarray:
-    """Translate a pose sequence so its median root x and median ground line match ``target``.
-
-    Args:
-        joints: [T, 15, 2] body15 coordinates (no NaN).
-        target: where the person should stand.
-
-    Returns:
-        [T, 15, 2] translated copy.
-    """
-    shift = placement_shift(joints, target)
-    return shifted(joints, shift, np.empty(joints.shape, dtype=np.result_type(joints, shift)))
-
-
-def placement_shift(joints: np.ndarray, target: Placement) -> np.ndarray:
-    """[2] float64 translation :func:`place` applies to [T, 15, 2] body15 ``joints`` (no NaN)."""
-    root_x, ground_y = _stand(joints)  # the height placement_of would also measure is not needed here
-    if not (np.isfinite(root_x) and np.isfinite(ground_y)):
-        raise InputError("track: cannot tell where the person stands (root or ankles never detected)")
-    return np.array([target.root_x - root_x, target.ground_y - ground_y])
-
-
-def shifted(joints: np.ndarray, shift: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """``joints + shift`` ([..., 2] + [2], summed in their common type) written into ``out`` (e.g. float32:
-    the sums rounded once, as ``(joints + shift).astype(out.dtype)``); returns ``out``.
-
-    As points (or one coordinate at a time): numpy broadcasts along a 2-long axis slowly. The same sums.
-    """
-    points, into = _points(joints), _points(out)
-    if points is not None and into is not None and shift.dtype == np.float64:
-        np.add(points, np.complex128(complex(shift[0], shift[1])), out=into, casting="same_kind")  # (not weak)
-        return out
-    for c in (0, 1):
-        np.add(joints[..., c], shift[c], out=out[..., c], casting="same_kind")
-    return out
-
-
-@contextlib.contextmanager
-def _quiet_nan() -> Iterator[None]:
-    """Silence numpy's all-NaN-slice warnings inside a block (the NaN results are handled)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", category=RuntimeWarning)
-        yield

@@ -26,7 +26,8 @@ from clone.cartoon.character import STANDARD, CharacterSpec
 from clone.demo import demo_motions
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
-from retarget.preprocess import LAYOUT, Placement, body15_track, place, placement_of, to_body15
+from retarget.placement import Placement, place, placement_of
+from retarget.preprocess import LAYOUT, body15_track, to_body15
 from retarget.world.camera import Camera, facing_angle, ground_origin, project
 from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, resample, rest_pose, retarget_3d
 

@@ -10,7 +10,8 @@ from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.readers import read_track
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
-from retarget.preprocess import placement_of, to_body15
+from retarget.placement import placement_of
+from retarget.preprocess import to_body15
 
 
 @pytest.fixture(scope="module")

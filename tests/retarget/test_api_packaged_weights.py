@@ -22,7 +22,8 @@ from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.baselines import global_scale_retarget
 from retarget.checkpoint import KIND, load_weights
 from retarget.model import VARIANTS
-from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15, placement_of
+from retarget.placement import placement_of
+from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15
 from tests.figures import tall_and_small, walking_figure
 
 

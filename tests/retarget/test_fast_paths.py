@@ -12,6 +12,7 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
+from retarget.placement import Placement, _stand, place
 from retarget.preprocess import (
     LAYOUT,
     LOCAL_INDEX,
@@ -19,11 +20,8 @@ from retarget.preprocess import (
     NUM_ROWS,
     ROOT_INDEX,
     NormStats,
-    Placement,
-    _stand,
     channels_to_joints,
     joints_to_channels,
-    place,
     row_statistics,
 )
 from retarget.windows import fade_weights, run_windowed, window_starts

@@ -8,18 +8,16 @@ from pose_io import InputError, PoseTrack
 from pose_io.clean import hold_fill
 from pose_io.layouts import LAYOUTS, JointLayout
 from pose_io.readers import read_track
+from retarget.placement import Placement, place, placement_of
 from retarget.preprocess import (
     LAYOUT,
     NUM_CHANNELS,
     POSE_CHANNELS,
     NormStats,
-    Placement,
     PreprocessConfig,
     channels_to_joints,
     filled_body15,
     joints_to_channels,
-    place,
-    placement_of,
     pose_channels,
     prepare_track,
     row_statistics,
