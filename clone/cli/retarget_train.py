@@ -45,8 +45,9 @@ def train(
                      "--average-from on to this file (rewritten after every epoch; kept in --out for --resume)."),
     ] = None,
     average_from: Annotated[
-        int, typer.Option("--average-from", min=1, help="First epoch (over resumed runs) in --average.")
-    ] = 1,
+        int | None, typer.Option("--average-from", min=1, help="First epoch (over resumed runs) in --average "
+                                 "(default: the resumed run's, else 1).")
+    ] = None,
     variant: Annotated[
         Variant, typer.Option("--variant", parser=Variant, help="Network: three encoders, or without view or body.")
     ] = Variant.FULL,
@@ -151,6 +152,8 @@ def train(
         if average.resolve() in {out.resolve(), best.resolve() if best is not None else None}:
             raise InputError(f"--average {average}: is --out or --best; choose another file")
     check_number("--average-from", average_from, 1, MAX_EPOCHS)
+    if average is None and average_from is not None:
+        raise InputError("--average-from: needs --average (the file the mean goes to)")
     check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
     check_number("--epochs", epochs, 1, MAX_EPOCHS)
     check_number("--batch-size", batch_size, 1, MAX_BATCH)
@@ -205,6 +208,6 @@ def train(
         elif best is not None:
             console.print(f"--best {best}: no epoch of this call beat the run's earlier ones; not written")
         if average is not None and summary.averaged_epochs:
-            console.print(f"wrote {average}: the mean of the weights of epochs {average_from}-{summary.epochs}")
+            console.print(f"wrote {average}: the mean of the weights of the run's epochs up to {summary.epochs}")
         elif average is not None:
-            console.print(f"--average {average}: no epoch from {average_from} on yet; not written")
+            console.print(f"--average {average}: no epoch of this call entered the mean; not written")

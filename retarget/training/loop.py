@@ -76,7 +76,7 @@ class TrainSummary:
         history: one dict per completed epoch (train and validation loss means, seconds).
         best_epoch: the epoch (from 1) whose weights ``best`` holds; None without ``best`` or when no epoch of
             this call beat the run's earlier ones.
-        averaged_epochs: epochs in the weight average ``average`` holds (0 without it).
+        averaged_epochs: epochs this call added to the weight average ``average`` (0 without it).
     """
 
     checkpoint: Path
@@ -120,7 +120,7 @@ def fit(
     amp: bool | None = None,
     best: str | Path | None = None,
     average: str | Path | None = None,
-    average_from: int = 1,
+    average_from: int | None = None,
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
 
@@ -147,7 +147,8 @@ def fit(
             validation is the lowest of the run so far (resumed runs included) to this file.
         average: also write the mean of the weights at the end of every epoch from ``average_from`` on
             (:class:`WeightAverage`, kept in ``out`` for resuming) to this file, rewritten after every epoch.
-        average_from: the first epoch (from 1, over resumed runs) in the mean.
+            Once a run averages, its later epochs join the mean even in calls without ``average``.
+        average_from: the first epoch (from 1, over resumed runs) in the mean (None: the run's, else 1).
 
     Returns:
         A :class:`TrainSummary` (the same on every process).
@@ -157,6 +158,11 @@ def fit(
             smaller than the number of processes.
     """
     out = Path(out)
+    for extra, option in ((best, "best"), (average, "average")):
+        if extra is not None and Path(extra).resolve() == out.resolve():
+            raise InputError(f"{extra}: the {option} weights would replace the checkpoint; choose another file")
+    if best is not None and average is not None and Path(best).resolve() == Path(average).resolve():
+        raise InputError(f"{best}: the best and the averaged weights need two files")
     dev = torch.device(device)
     world = distributed.current()
     target_epochs = epochs if epochs is not None else (DEFAULT_EPOCHS if minutes is None else math.inf)
@@ -207,12 +213,15 @@ def fit(
         real_rng.bit_generator.state = training["real_rng"]
     done = training or {}
     epoch: int = done.get("epoch", 0)
+    # Once a run averages, every later epoch joins the mean, written out or not (a call without ``average``).
+    stored = done.get("average")
     averager = None
-    if average is not None:
-        if done.get("average") is None and epoch >= average_from:
-            raise InputError(f"the weight average starts at epoch {average_from}, but this run has done {epoch} "
+    if average is not None or stored is not None:
+        first = average_from if average_from is not None else stored["first"] if stored is not None else 1
+        if stored is None and epoch >= first:
+            raise InputError(f"the weight average starts at epoch {first}, but this run has done {epoch} "
                              "epochs without one; start it later")
-        averager = WeightAverage(average_from, done.get("average"))
+        averager = WeightAverage(first, stored)
     step_in_epoch: int = done.get("step", 0)
     global_step: int = done.get("global_step", 0)
     elapsed_before: float = done.get("elapsed_s", 0.0)
@@ -248,7 +257,8 @@ def fit(
     stopped = "epochs"
     best_epoch = None
     scores = [retargeting_error(r, config) for r in history]
-    lowest = min((v for v in scores if v is not None), default=math.inf)
+    lowest = min((v for v in scores if v is not None and math.isfinite(v)), default=math.inf)
+    averaged_before = averager.count if averager is not None else 0
     while epoch < target_epochs:
         dataset.epoch = epoch
         sums: dict[str, float] = {}
@@ -292,17 +302,16 @@ def fit(
         record["seconds"] = elapsed_before + time.monotonic() - started
         record = distributed.broadcast(record)  # rank 0 validated
         history.append(record)
-        averaged = averager is not None and averager.update(epoch, model)
-        save()
-        if averaged and world.is_main:
+        # The best and averaged weights go first: a run stopped before the checkpoint below redoes this epoch.
+        if averager is not None and averager.update(epoch, model) and average is not None and world.is_main:
             save_checkpoint(average, averager.module(model), stats, preprocess)
         score = retargeting_error(record, config)
-        if best is not None and score is not None and score < lowest:
+        if best is not None and score is not None and math.isfinite(score) and score < lowest:
             lowest, best_epoch = score, epoch
             if world.is_main:
                 save_checkpoint(best, model, stats, preprocess)
                 log.info("epoch %d: lowest validation retargeting error so far (%.4f); weights in %s", epoch, score, best)
-            distributed.barrier()
+        save()
         report(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
         if world.is_main:
             log.info("epoch %d: %s", epoch, _format(record))
@@ -310,7 +319,7 @@ def fit(
             stopped = "time" if epoch < target_epochs else "epochs"
             break
     return TrainSummary(out, epoch, global_step, stopped, history, best_epoch,
-                        averager.count if averager is not None else 0)
+                        averager.count - averaged_before if average is not None else 0)
 
 
 def _require_new(out: Path) -> None:

@@ -51,7 +51,7 @@ def train(
     amp: bool | None = None,
     best: str | Path | None = None,
     average: str | Path | None = None,
-    average_from: int = 1,
+    average_from: int | None = None,
 ) -> TrainSummary:
     """Build (or reuse the cache of) the motion world from ``mocap_dir`` and :func:`fit` on it.
 

@@ -119,4 +119,7 @@ def test_train_errors_are_one_line(tmp_path):
     result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path), "--out", str(tmp_path / "n.pt"),
                                  "--best", str(tmp_path / "b.pt"), "--average", str(tmp_path / "b.pt")])
     assert result.exit_code == 2 and "is --out or --best" in result.output
+    result = runner.invoke(app, ["retarget", "train", "--mocap", str(tmp_path), "--out", str(tmp_path / "n.pt"),
+                                 "--average-from", "3"])
+    assert result.exit_code == 2 and "needs --average" in result.output
     assert out.read_bytes() == b"" and not (tmp_path / "b.pt").exists() and not (tmp_path / "n.pt").exists()

@@ -196,6 +196,16 @@ def test_average_is_the_mean_of_the_weights_of_the_chosen_epochs_across_resumes(
         torch.testing.assert_close(parts_mean[key], value, rtol=0, atol=0)
     assert not torch.equal(mean["motion_encoder.layers.0.weight"], ends[-1]["motion_encoder.layers.0.weight"])
     assert load_checkpoint(tmp_path / "mean.pt").training is None
+    # A call without the option in between: its epoch still joins the mean.
+    fit(split, val, tmp_path / "gap.pt", TINY, epochs=2, average=tmp_path / "gap_mean.pt", average_from=2)
+    fit(split, val, tmp_path / "gap.pt", TINY, epochs=3, resume=True)
+    last = fit(split, val, tmp_path / "gap.pt", TINY, epochs=4, resume=True, average=tmp_path / "gap_mean.pt")
+    assert last.averaged_epochs == 1  # added by this call
+    for key, value in _weights(tmp_path / "gap_mean.pt").items():
+        torch.testing.assert_close(value, mean[key], rtol=0, atol=0)
+    for option in ("best", "average"):
+        with pytest.raises(InputError, match="would replace the checkpoint"):
+            fit(split, val, tmp_path / "whole.pt", TINY, epochs=5, resume=True, **{option: tmp_path / "whole.pt"})
     # A run that went past the first averaged epoch without averaging cannot start now.
     fit(split, val, tmp_path / "plain.pt", TINY, epochs=2)
     with pytest.raises(InputError, match="start it later"):
