@@ -196,14 +196,29 @@ def objective(
             anchors[SKELETON], triple[SKELETON], config.skeleton_ratio
         )
     if config.skeleton_cluster_weight > 0 and SKELETON in triple and ids is not None:
-        codes = model.encode_body(inputs.flatten(0, 1)).flatten(1).reshape(b, len(COMBOS), -1)  # [B, 8, D]
+        codes = _skeleton_codes(model, inputs, triple[SKELETON], anchors.get(SKELETON))  # 8 x [B, D]
         own = [[combo_index(m, t, v) for m in (0, 1) for v in (0, 1)] for t in (0, 1)]  # character t's windows
-        per_character = torch.stack([codes[:, k] for k in own], dim=1)  # [B, 2, 4, D]
+        per_character = torch.stack([torch.stack([codes[k] for k in ks], dim=1) for ks in own], dim=1)  # [B, 2, 4, D]
         losses["skeleton_cluster"] = config.skeleton_cluster_weight * skeleton_cluster_loss(
             per_character, ids[:, :, SKELETON], config.skeleton_cluster_ratio
         )
     losses["total"] = sum(losses.values())
     return losses
+
+
+def _skeleton_codes(
+    model: RetargetNet, inputs: torch.Tensor, triple: torch.Tensor, anchors: torch.Tensor | None
+) -> list[torch.Tensor]:
+    """Skeleton codes [B, D] of all 8 combinations, reusing the two triples' ([2, B, D, ...]) and the skeleton
+    anchors' ([2B, D], :func:`_anchor_codes`) where the objective already encoded them."""
+    b = inputs.shape[0]
+    known = {0: triple[0].flatten(1), combo_index(1, 1, 1): triple[1].flatten(1)}
+    if anchors is not None:
+        known[combo_index(1, 0, 1)], known[combo_index(0, 1, 0)] = anchors[:b], anchors[b:]
+    rest = [k for k in range(len(COMBOS)) if k not in known]
+    encoded = model.encode_body(inputs[:, rest].transpose(0, 1).flatten(0, 1)).flatten(1)  # [len(rest) * B, D]
+    known.update(zip(rest, encoded.reshape(len(rest), b, -1)))
+    return [known[k] for k in range(len(COMBOS))]
 
 
 def skeleton_cluster_loss(codes: torch.Tensor, characters: torch.Tensor, ratio: float) -> torch.Tensor:
