@@ -8,55 +8,48 @@ epoch measured but the best one, and a lower pose error on demo-like cloning pai
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
-import torch
 from torch import nn
+from torch.optim.swa_utils import AveragedModel
 
 from pose_io.errors import InputError
 
 
 class WeightAverage:
     """The mean of a model's parameters and buffers at the end of epochs ``first``, ``first + 1``, ...
+    (torch's :class:`~torch.optim.swa_utils.AveragedModel`, started at ``first``).
 
     Attributes:
         first: the first epoch (counted from 1) that enters the mean.
-        count: epochs in it so far.
     """
 
-    def __init__(self, first: int, state: dict[str, Any] | None = None) -> None:
+    def __init__(self, first: int, model: nn.Module, state: dict[str, Any] | None = None) -> None:
         if first < 1:
             raise InputError(f"the weight average must start at epoch 1 or later, got {first}")
         self.first = first
-        self.count = 0
-        self._mean: dict[str, torch.Tensor] = {}
+        self._mean = AveragedModel(model, use_buffers=True)
         if state is not None:
             if state["first"] != first:
                 raise InputError(f"this run averages the weights from epoch {state['first']}; resume with that")
-            self.count = int(state["count"])
-            self._mean = {k: v.clone() for k, v in state["mean"].items()}
+            self._mean.load_state_dict(state["mean"])
+
+    @property
+    def count(self) -> int:
+        """Epochs in the mean so far."""
+        return int(self._mean.n_averaged)
 
     def update(self, epoch: int, model: nn.Module) -> bool:
         """Add the model's weights as they are at the end of ``epoch``; False (nothing added) before ``first``."""
         if epoch < self.first:
             return False
-        self.count += 1
-        for key, value in model.state_dict().items():
-            value = value.detach().to("cpu", torch.float64)
-            if key not in self._mean:
-                self._mean[key] = value.clone()
-            else:
-                self._mean[key] += (value - self._mean[key]) / self.count
+        self._mean.update_parameters(model)
         return True
 
-    def module(self, model: nn.Module) -> nn.Module:
-        """A copy of ``model`` holding the mean (in the model's dtypes); ``model`` is left as it is."""
-        current = model.state_dict()
-        out = copy.deepcopy(model)
-        out.load_state_dict({k: v.to(current[k].dtype) for k, v in self._mean.items()})
-        return out
+    def module(self) -> nn.Module:
+        """The network holding the mean (not a copy: save it, do not train it)."""
+        return self._mean.module
 
     def state(self) -> dict[str, Any]:
         """What a checkpoint stores to resume the mean."""
-        return {"first": self.first, "count": self.count, "mean": {k: v.clone() for k, v in self._mean.items()}}
+        return {"first": self.first, "mean": {k: v.detach().clone() for k, v in self._mean.state_dict().items()}}

@@ -221,7 +221,7 @@ def fit(
         if stored is None and epoch >= first:
             raise InputError(f"the weight average starts at epoch {first}, but this run has done {epoch} "
                              "epochs without one; start it later")
-        averager = WeightAverage(first, stored)
+        averager = WeightAverage(first, model, stored)
     step_in_epoch: int = done.get("step", 0)
     global_step: int = done.get("global_step", 0)
     elapsed_before: float = done.get("elapsed_s", 0.0)
@@ -304,7 +304,7 @@ def fit(
         history.append(record)
         # The best and averaged weights go first: a run stopped before the checkpoint below redoes this epoch.
         if averager is not None and averager.update(epoch, model) and average is not None and world.is_main:
-            save_checkpoint(average, averager.module(model), stats, preprocess)
+            save_checkpoint(average, averager.module(), stats, preprocess)
         score = retargeting_error(record, config)
         if best is not None and score is not None and math.isfinite(score) and score < lowest:
             lowest, best_epoch = score, epoch
