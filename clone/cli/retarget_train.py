@@ -113,6 +113,11 @@ def train(
         float, typer.Option("--perspective", help="Share of training cameras that see in perspective from 2-8 m "
                             "(0: all weak-perspective, like the world's).")
     ] = 0.0,
+    frontal_share: Annotated[
+        float, typer.Option("--frontal-share", help="Share of training samples whose people are all seen from "
+                            "within 45 degrees of the front, the views of most videos (0: every sample draws "
+                            "from all 13 view bins, like the world).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -163,6 +168,7 @@ def train(
     check_number("--extra-spread", extra_spread, 0.1, 4.0)
     check_number("--max-pitch", max_pitch, 0, 60)
     check_number("--perspective", perspective, 0, 1)
+    check_number("--frontal-share", frontal_share, 0, 1)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -175,7 +181,8 @@ def train(
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,
-                             cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective))
+                             cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective,
+                                                  frontal=frontal_share))
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

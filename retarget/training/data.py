@@ -3,6 +3,7 @@ scales, the validation set and the data loader of one epoch."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Iterator, Sequence
 from typing import Protocol
@@ -25,7 +26,7 @@ from retarget.preprocess import (
     row_statistics,
 )
 from retarget.training.config import TrainConfig
-from retarget.world.camera import WORLD_CAMERAS, CameraSpread
+from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,7 @@ class WorldSplit(Protocol):
     num_motions: int
     num_characters: int
     num_views: int
+    views: tuple[float, ...]  # yaw of each view bin (degrees); read only for a frontal share
 
     def window(
         self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
@@ -60,7 +62,8 @@ class CrossSamples(Dataset):
         scales: optional [C] factor per character (body-height normalisation), applied about the origin.
         cameras: how each view slot's camera is drawn (default: the world's own). With another spread and
             ``scales``, a window is brought to ``height`` by its own skeleton height instead, as inference
-            brings a track: a steep or near camera changes how tall a character looks.
+            brings a track: a steep or near camera changes how tall a character looks. Its ``frontal`` share
+            of samples draws its views from the bins within :data:`FRONTAL_YAW` of the front.
         height: the skeleton height (canvas pixels) ``scales`` bring characters to.
     """
 
@@ -77,8 +80,10 @@ class CrossSamples(Dataset):
         self.seed = seed
         self.scales = scales
         self.cameras = cameras
-        # Only a non-default spread is passed on: any WorldSplit (and test doubles) takes the default.
-        self._camera_kwargs = {} if cameras == WORLD_CAMERAS else {"cameras": cameras}
+        # Only a non-default spread is passed on: any WorldSplit (and test doubles) takes the default. The
+        # frontal share picks view bins, not the camera of a window.
+        window_cameras = dataclasses.replace(cameras, frontal=0.0)
+        self._camera_kwargs = {} if window_cameras == WORLD_CAMERAS else {"cameras": window_cameras}
         self.own_height = bool(self._camera_kwargs) and scales is not None
         if self.own_height and not (height is not None and height > 0):
             raise ValueError("a camera spread with body scales needs the target height")
@@ -86,6 +91,13 @@ class CrossSamples(Dataset):
         self.epoch = 0
         self.vary_character = config.body_channels is not None and split.num_characters > 1
         self.vary_view = config.view_channels is not None and split.num_views > 1
+        self.frontal_views = np.arange(split.num_views)
+        if cameras.frontal > 0:
+            self.frontal_views = np.flatnonzero(np.abs(np.asarray(split.views)) <= FRONTAL_YAW)
+            need = 2 if self.vary_view else 1
+            if len(self.frontal_views) < need:
+                raise InputError(f"the split has {len(self.frontal_views)} view(s) within {FRONTAL_YAW:g} degrees "
+                                 f"of the front; a frontal share needs {need}")
 
     def __len__(self) -> int:
         return self.size
@@ -95,7 +107,11 @@ class CrossSamples(Dataset):
         rng = np.random.default_rng([self.seed, epoch, index])
         motions = rng.choice(self.split.num_motions, 2, replace=False)
         chars = _pair(rng, self.split.num_characters, self.vary_character)
-        views = _pair(rng, self.split.num_views, self.vary_view)
+        # Without a frontal share no extra number is drawn: runs before it draw the same samples.
+        if self.cameras.frontal > 0 and rng.random() < self.cameras.frontal:
+            views = self.frontal_views[_pair(rng, len(self.frontal_views), self.vary_view)]
+        else:
+            views = _pair(rng, self.split.num_views, self.vary_view)
         # The world's `rng` perturbs the camera (pitch): a fresh generator per view slot gives every
         # window seen from one view the same camera.
         view_seeds = rng.integers(0, 2**63 - 1, size=2)

@@ -24,6 +24,7 @@ from retarget.train import (
     train,
     train_step,
 )
+from retarget.world.camera import CameraSpread
 
 _PARENT = {
     "neck": "mid_hip", "nose": "neck", "r_shoulder": "neck", "r_elbow": "r_shoulder", "r_wrist": "r_elbow",
@@ -55,6 +56,7 @@ class FakeSplit:
         ]
         self.characters = [{n: rng.uniform(0.8, 1.25) for n in _PARENT} for _ in range(characters)]
         self.yaws = np.linspace(-1.0, 1.0, views)
+        self.views = tuple(float(np.degrees(y)) for y in self.yaws)
 
     def window(self, motion, character, view, length=64, offset=0, rng=None):
         t = np.arange(offset, offset + length, dtype=np.float64)
@@ -103,6 +105,32 @@ def test_samples_are_deterministic_and_consistent():
     skeleton = CrossSamples(split, 64, "skeleton", 10, seed=3).sample(0, 0)
     assert skeleton["ids"][0, 2] == skeleton["ids"][1, 2]  # no view encoder: one view
     np.testing.assert_array_equal(skeleton["windows"][combo_index(0, 1, 0)], skeleton["windows"][combo_index(0, 1, 1)])
+
+
+def test_a_frontal_share_draws_views_near_the_front_and_nothing_else_changes():
+    split = FakeSplit(views=5)  # yaws -57, -29, 0, 29, 57 degrees: bins 1-3 are frontal
+    plain = CrossSamples(split, 64, "full", 200, seed=3)
+    unchanged = CrossSamples(split, 64, "full", 200, seed=3, cameras=CameraSpread(frontal=0.0))
+    frontal = CrossSamples(split, 64, "full", 200, seed=3, cameras=CameraSpread(frontal=1.0))
+    half = CrossSamples(split, 64, "full", 200, seed=3, cameras=CameraSpread(frontal=0.5))
+    for i in range(5):  # no share: the same samples as before the option, bit for bit
+        np.testing.assert_array_equal(plain.sample(1, i)["windows"], unchanged.sample(1, i)["windows"])
+    views = {name: np.array([d.sample(1, i)["ids"][:, 2] for i in range(200)]) for name, d in
+             (("plain", plain), ("frontal", frontal), ("half", half))}  # fmt: skip
+    assert set(np.unique(views["frontal"])) == {1, 2, 3}
+    assert (views["frontal"][:, 0] != views["frontal"][:, 1]).all()  # still two views per sample
+    outside = {name: np.isin(v, (0, 4)).any(axis=1).mean() for name, v in views.items()}
+    assert 0.6 < outside["plain"] < 0.8  # 1 - 3/5 * 2/4 = 0.7
+    assert 0.25 < outside["half"] < 0.45  # half of it
+    # A window is still the split's window of its ids, through the view slot's camera (only views moved).
+    sample = frontal.sample(0, 0)
+    ids = sample["ids"]
+    clean = split.window(ids[0, 0], ids[0, 1], ids[0, 2], length=64)
+    assert np.abs(sample["windows"][combo_index(0, 0, 0)] - clean).max() < 40
+    with pytest.raises(InputError, match="within 45 degrees"):
+        CrossSamples(FakeSplit(views=2), 64, "full", 4, seed=0, cameras=CameraSpread(frontal=0.5))
+    config = TrainConfig(cameras=CameraSpread(frontal=0.5))
+    assert TrainConfig.from_dict(config.to_dict()) == config
 
 
 def test_one_training_step_lowers_the_loss():
