@@ -207,6 +207,17 @@ def evaluate(
     ] = None,
     pairs: Annotated[int, typer.Option("--pairs", min=1, help="Cases per source (split, extra mocap).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per case.")] = 64,
+    reference_length: Annotated[
+        int, typer.Option("--reference-length", min=16, help="Frames of a case's reference (a reference video is "
+                          "longer than the paper's 64).")
+    ] = 64,
+    max_yaw: Annotated[
+        float, typer.Option("--max-yaw", help="Cameras are view bins within +-this many degrees of the front (90: "
+                            "all 13, the paper's protocol; 45: the views of most videos, which cloning meets).")
+    ] = 90.0,
+    max_pitch: Annotated[
+        float, typer.Option("--max-pitch", help="Cameras' pitch is drawn in +-this many degrees (the world's: 10).")
+    ] = 10.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the cases.")] = 0,
     noise: Annotated[
         float, typer.Option("--noise", help="Detector noise on the inputs: Gaussian, std as a fraction of the "
@@ -240,6 +251,9 @@ def evaluate(
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
     check_number("--pairs", pairs, 1, MAX_PAIRS)
     check_number("--length", length, 16, MAX_LENGTH)
+    check_number("--reference-length", reference_length, 16, MAX_LENGTH)
+    check_number("--max-yaw", max_yaw, 0, 90)
+    check_number("--max-pitch", max_pitch, 0, 60)
     check_number("--noise", noise, 0, 0.1)
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
@@ -263,7 +277,9 @@ def evaluate(
         task = bar.add_task("eval", total=None)
         doc, table = run_eval(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
-            config=EvalConfig(pairs=pairs, length=length, seed=seed, noise=noise), fps=world.config.fps, device=device,
+            config=EvalConfig(pairs=pairs, length=length, reference_length=reference_length, seed=seed, max_yaw=max_yaw,
+                              max_pitch=max_pitch, noise=noise),
+            fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed, refine_steps=refine_steps,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )

@@ -1,8 +1,9 @@
 """Evaluation of 2D retargeting on the motion world: the error table and the code silhouettes.
 
 Protocol. A *case* moves the motion of window ``mA`` performed by character ``cA`` and seen by camera A onto
-character ``cB`` seen by camera B (``cA != cB``; each camera is one of the 13 view bins with a pitch drawn
-uniformly in +-``max_pitch`` degrees; every choice comes from one seeded generator). The ground truth is the
+character ``cB`` seen by camera B (``cA != cB``; each camera is one of the 13 view bins, or of those within
++-``max_yaw`` degrees of the front, with a pitch drawn uniformly in +-``max_pitch`` degrees; every choice comes
+from one seeded generator). The ground truth is the
 world's own answer: the same 3D motion replayed on ``cB`` (``retarget_3d``: every bone keeps its direction and
 takes ``cB``'s length, the root path is scaled by the leg ratio, the feet stay on the ground) and projected
 by camera B with the framing rule - ``WorldSplit.window(mA, cB, vB)``.

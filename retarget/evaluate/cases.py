@@ -113,11 +113,15 @@ def sample_cases(
         raise InputError(f"{split.name} split: no {config.length}-frame window with a reference window of "
                          f"{config.reference_length} frames that shares none of its frames")  # fmt: skip
     fits = sorted(candidates)
+    # With every bin allowed this draws exactly what the protocol drew before it had max_yaw.
+    views = np.flatnonzero(np.abs(np.asarray(split.views)) <= config.max_yaw + 1e-9)
+    if not len(views):
+        raise InputError(f"{split.name} split: no view within {config.max_yaw:g} degrees of the front")
     cases = []
     for _ in range(config.pairs):
         m = fits[rng.integers(len(fits))]
         ca, cb = rng.choice(split.num_characters, size=2, replace=False)
-        va, vb = rng.integers(0, split.num_views, size=2)
+        va, vb = views[rng.integers(0, len(views), size=2)]
         pa, pb = rng.uniform(-config.max_pitch, config.max_pitch, size=2)
         ref = candidates[m][rng.integers(len(candidates[m]))]
         cases.append(Case(m, int(ca), int(va), float(pa), int(cb), int(vb), float(pb), ref))

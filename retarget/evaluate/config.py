@@ -22,6 +22,8 @@ class EvalConfig:
         reference_length: frames of a reference window.
         seed: seeds every choice of cases and of the silhouette windows.
         max_pitch: cameras get a pitch drawn uniformly in +-max_pitch degrees.
+        max_yaw: cameras A and B are view bins within +-max_yaw degrees of the front (90: all 13, the paper's
+            protocol; 45: the views of most videos, those cloning meets).
         code_samples: motions, characters and views each in the silhouette grid (``code_samples^3`` windows).
         noise: detector noise: every joint of the driver and reference tracks the methods see is moved by
             Gaussian noise of this std, as a fraction of that person's height (0 = clean; real OpenPose tracks
@@ -33,6 +35,7 @@ class EvalConfig:
     reference_length: int = 64
     seed: int = 0
     max_pitch: float = MAX_PITCH
+    max_yaw: float = 90.0
     code_samples: int = 6
     noise: float = 0.0
 
@@ -41,6 +44,8 @@ class EvalConfig:
             raise ValueError("pairs must be >= 1 and length, reference_length >= 8")
         if self.code_samples < 2 or self.max_pitch < 0:
             raise ValueError("code_samples must be >= 2 and max_pitch >= 0")
+        if not 0 <= self.max_yaw <= 90:
+            raise ValueError("max_yaw must be in [0, 90] degrees")
         if not 0 <= self.noise <= 0.1:
             raise ValueError("noise must be in [0, 0.1] of the height")
 

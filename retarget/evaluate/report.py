@@ -42,6 +42,12 @@ def markdown_report(doc: Mapping) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _views(cfg: Mapping) -> str:
+    """Which view bins the cases' cameras take (configs written before ``max_yaw`` took all 13)."""
+    max_yaw = cfg.get("max_yaw", 90.0)
+    return "13 view bins" if max_yaw >= 90 else f"the view bins within ±{max_yaw:g}° of the front"
+
+
 def report_notes(doc: Mapping) -> list[str]:
     """The notes of eval.md: the protocol, the units, every row's description and the run's remarks.
 
@@ -51,7 +57,7 @@ def report_notes(doc: Mapping) -> list[str]:
     cfg = doc["config"]
     notes = [
         (f"Cases: {cfg['pairs']} per source, seed {cfg['seed']}: the motion of a window performed by character A "
-         f"seen by camera A, moved onto character B (≠ A) seen by camera B (13 view bins, pitch uniform in "
+         f"seen by camera A, moved onto character B (≠ A) seen by camera B ({_views(cfg)}, pitch uniform in "
          f"±{cfg['max_pitch']:g}°). Truth: the same 3D motion replayed on B's skeleton (bone directions kept, root "
          "path scaled by the leg ratio, feet on the ground) and projected by camera B."
          + (f" Detector noise: every joint of the driver and reference the methods see moved by Gaussian noise of "

@@ -178,7 +178,8 @@ for path, builder in BAD_MODELS.items():
 EVAL = ["retarget", "eval", "--mocap", "{t}/mocap", "--out", "{t}/evalout", "--device", "cpu"]
 options("retarget eval", EVAL, [b.mocap_empty], {
     "--pairs": BAD_COUNTS, "--length": ["15", "nan", "999999999"], "--threads": ["0"], "--split": ["bogus"],
-    "--noise": ["-0.1", "nan", "0.5"],
+    "--noise": ["-0.1", "nan", "0.5"], "--max-yaw": ["-1", "nan", "91"], "--max-pitch": ["-1", "nan", "61"],
+    "--reference-length": ["0", "9999999"],
 })
 paths("retarget eval", EVAL[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out", ["{t}/olddir", "{t}/old.npz",
                                                                           "{t}/blocker/e"])

@@ -27,6 +27,20 @@ def test_cases_are_seeded_and_references_share_no_frame(cache: Path, tiny_mocap:
         sample_cases(split, split, EvalConfig(pairs=1, length=128), np.random.default_rng(0))
 
 
+def test_max_yaw_keeps_cameras_near_the_front(cache: Path, tiny_mocap: Path) -> None:
+    split = MotionWorld.build(tiny_mocap, cache).split("test")
+    everything = sample_cases(split, split, EvalConfig(pairs=80), np.random.default_rng(3))
+    # 90 is the paper's protocol: every bin, and the very cases drawn before the option existed.
+    assert everything == sample_cases(split, split, EvalConfig(pairs=80, max_yaw=90), np.random.default_rng(3))
+    yaws = np.asarray(split.views)
+    assert max(abs(yaws[c.view]) for c in everything) == 90
+    near = sample_cases(split, split, EvalConfig(pairs=80, max_yaw=45), np.random.default_rng(3))
+    seen = {yaws[v] for c in near for v in (c.source_view, c.view)}
+    assert seen == {-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0}
+    front = sample_cases(split, split, EvalConfig(pairs=5, max_yaw=0), np.random.default_rng(3))
+    assert all(yaws[c.source_view] == yaws[c.view] == 0 for c in front)
+
+
 def test_extra_clips_replay_like_the_world(cache: Path, tiny_mocap: Path) -> None:
     split = MotionWorld.build(tiny_mocap, cache).split("test")
     motion = load_motion(tiny_mocap / Path(TINY[1]).name)  # the test split's own clip

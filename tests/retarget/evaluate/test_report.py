@@ -38,6 +38,15 @@ def test_tables_silhouettes_and_notes() -> None:
     assert table.endswith("\n")
 
 
+def test_notes_say_which_views_the_cases_take() -> None:
+    doc = _document()
+    assert "seen by camera B (13 view bins, pitch uniform in ±10°)" in report_notes(doc)[0]
+    doc["config"] = asdict(EvalConfig(pairs=3, max_yaw=45, max_pitch=0))
+    assert "(the view bins within ±45° of the front, pitch uniform in ±0°)" in report_notes(doc)[0]
+    del doc["config"]["max_yaw"]  # an eval.json written before the option: all 13 bins
+    assert "13 view bins" in report_notes(doc)[0]
+
+
 def test_sections_without_real_tracks_or_networks() -> None:
     doc = _document() | {"real_pairs": {}, "silhouettes": {}}
     doc["notes"] = report_notes(doc)
