@@ -17,7 +17,8 @@ from pathlib import Path
 from types import MappingProxyType
 
 from pose_io.errors import InputError
-from retarget.world.skeleton import BONE_NAMES, NAMED_CHARACTERS, Skeleton
+from retarget.world.characters import NAMED_CHARACTERS
+from retarget.world.skeleton import BONE_NAMES, Skeleton
 
 # Part -> the world bones it scales (a bone is named after its child joint: "l_knee" is the left thigh, "head"
 # runs from the shoulders up to the centre of the skull, "nose" from there to the face).

@@ -80,7 +80,7 @@ def render_command(
 def characters_command() -> None:
     """List the named characters: height, proportions and look."""
     from clone.synth.appearance import get_character
-    from retarget.world.skeleton import NAMED_CHARACTERS
+    from retarget.world.characters import NAMED_CHARACTERS
 
     for name in NAMED_CHARACTERS:
         skeleton, look, _ = get_character(name)

@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pose_io.errors import InputError
-from retarget.world.skeleton import NAMED_CHARACTERS, Skeleton, sample_skeleton
+from retarget.world.characters import NAMED_CHARACTERS, sample_skeleton
+from retarget.world.skeleton import Skeleton
 
 RGB = tuple[int, int, int]
 

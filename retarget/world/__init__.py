@@ -4,7 +4,7 @@ Numpy only (no torch): ``retarget`` training code turns the arrays into tensors 
 
 - ``load_motion``: BVH / AMC of known rigs -> ``Motion3D`` on the canonical 18-joint skeleton.
 - ``mocap``: the BVH and ASF/AMC readers and forward kinematics ``load_motion`` builds on.
-- ``Skeleton``, ``sample_skeleton``, ``NAMED_CHARACTERS``, ``skeleton_of``, ``retarget_3d``: characters.
+- ``Skeleton``, ``skeleton_of``, ``retarget_3d``: skeletons and 3D retargeting; ``sample_skeleton``, ``NAMED_CHARACTERS``: characters.
 - ``Camera``, ``CameraSpread`` (random training cameras), ``frame_camera``, ``facing_angle``, ``project``, ``VIEW_YAWS``: views and the framing rule.
 - ``MotionWorld``: the cached dataset of labelled (motion, character, view) windows.
 """
@@ -20,18 +20,16 @@ from retarget.world.camera import (
     ground_origin,
     project,
 )
+from retarget.world.characters import NAMED_CHARACTERS, make_skeleton, sample_skeleton
 from retarget.world.config import default_cache_dir
 from retarget.world.dataset import MotionWorld
 from retarget.world.rigs import RIGS, load_motion
 from retarget.world.skeleton import (
     BONES,
-    NAMED_CHARACTERS,
     WORLD_JOINTS,
     Motion3D,
     Skeleton,
-    make_skeleton,
     retarget_3d,
-    sample_skeleton,
     skeleton_of,
 )
 from retarget.world.split import WindowLabel, WorldSplit

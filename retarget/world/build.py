@@ -17,16 +17,15 @@ from pose_io.atomic import check_free_space
 from pose_io.errors import InputError
 from retarget.windows import strided_starts
 from retarget.world.camera import MAX_PITCH, VIEW_YAWS
+from retarget.world.characters import NAMED_CHARACTERS, sample_skeleton
 from retarget.world.config import SPLITS, WORLD_VERSION, WorldConfig
 from retarget.world.rigs import load_motion, motion_name
 from retarget.world.skeleton import (
     BONE_NAMES,
-    NAMED_CHARACTERS,
     WORLD_JOINTS,
     Motion3D,
     Skeleton,
     retarget_3d,
-    sample_skeleton,
 )
 
 log = logging.getLogger(__name__)

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from pose_io.readers import read_track
-from retarget.world.skeleton import NAMED_CHARACTERS
+from retarget.world.characters import NAMED_CHARACTERS
 
 # (name, parent, offset in cm): a small rig with MotionBuilder joint names (as Rokoko and most generic
 # exports use), Y up, facing +Z, its left side at +X.

@@ -6,7 +6,7 @@ import pytest
 
 from clone.synth import NAMED_LOOKS, Look, get_character, get_look, look_from_seed
 from pose_io import InputError
-from retarget.world.skeleton import NAMED_CHARACTERS
+from retarget.world.characters import NAMED_CHARACTERS
 
 
 def test_looks_from_seeds_are_reproducible_and_varied() -> None:
