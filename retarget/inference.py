@@ -20,9 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from pose_io.clean import resample, resampled_frames, smooth_joints
+from pose_io.clean import smooth_joints
 from pose_io.errors import InputError
 from pose_io.limits import MAX_FPS, MIN_FPS, check_frame_count
+from pose_io.resample import resample, resampled_frames
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
 from retarget.placement import Placement, placement_of, placement_shift, shifted

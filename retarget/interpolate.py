@@ -35,9 +35,10 @@ import cv2
 import numpy as np
 import torch
 
-from pose_io.clean import resample, resample_values, smooth_joints
+from pose_io.clean import smooth_joints
 from pose_io.draw import blank_canvas, draw_pose
 from pose_io.errors import InputError
+from pose_io.resample import resample, resample_values
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter, _pad_to_multiple
 from retarget.placement import place

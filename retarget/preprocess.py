@@ -25,10 +25,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pose_io.clean import drop_outlier_joints, hold_fill, resample_values, smooth_joints
+from pose_io.clean import drop_outlier_joints, hold_fill, smooth_joints
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15, convert_joints, get_layout, require_convertible
 from pose_io.measures import skeleton_height
+from pose_io.resample import resample_values
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:
@@ -458,7 +459,7 @@ def prepare(
     """A real track as clean body15 poses in the network canvas (the authors' preprocessing).
 
     Converts to body15 once (dropping outlier joints), fills gaps (:func:`hold_fill`), resamples to ``fps``
-    if given (:func:`pose_io.clean.resample_values`: after the filling, so a flickering joint does not turn
+    if given (:func:`pose_io.resample.resample_values`: after the filling, so a flickering joint does not turn
     into wider gaps), smooths over time and scales to the canvas (:func:`canvas_scale`: by the skeleton
     height, or by the image height for the authors' weights).
 

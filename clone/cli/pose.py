@@ -171,6 +171,7 @@ def convert(
     """
     from clone.outputs import FOLDER, check_number, check_output
     from pose_io import clean
+    from pose_io.resample import resample
     from pose_io.writers import write_track
 
     kinds = {"openpose": (FOLDER,), "npz": (".npz",), "csv": (".csv",)}
@@ -187,7 +188,7 @@ def convert(
     if smooth:
         track = clean.smooth(track, smooth)
     if fps is not None:
-        track = clean.resample(track, fps)
+        track = resample(track, fps)
     if to_layout is not None:
         track = track.to_layout(to_layout.value)
     write_track(track, dst, fmt=to.value if to is not None else None, overwrite=overwrite)

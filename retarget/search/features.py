@@ -7,7 +7,7 @@ Two encoders, one interface, so the search and its baseline run the same cross-c
 - :class:`JointEncoder`: the baseline, root-relative body15 joints divided by the body height
   (:func:`pose_io.measures.skeleton_height`), one step per frame; it cannot ignore body and view.
 
-Every track is first brought to the encoder's frame rate (:func:`pose_io.clean.resample`), so tracks filmed
+Every track is first brought to the encoder's frame rate (:func:`pose_io.resample.resample`), so tracks filmed
 at 25 and 60 fps compare with each other; frame numbers are mapped back to each track's own frames by the
 search. A track longer than ``chunk`` frames is encoded in overlapping pieces whose seams are cut away, so
 memory stays bounded and the codes are those of one pass over the whole track.
@@ -22,9 +22,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from pose_io.clean import resample
 from pose_io.errors import InputError
 from pose_io.measures import skeleton_height
+from pose_io.resample import resample
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
 from retarget.inference import NETWORK_FPS

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from pose_io import InputError, PoseTrack, fill_gaps, resample, smooth
-from pose_io.clean import resample_values
+from pose_io.resample import resample_values
 
 
 def line_track(t_len: int = 20, fps: float = 30.0) -> PoseTrack:

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 from pose_io import BODY25, InputError, PoseTrack, read_track, read_track_summary, write_track
-from pose_io.clean import drop_outlier_joints, resample, smooth
+from pose_io.clean import drop_outlier_joints, smooth
 from pose_io.limits import MAX_IMAGE_SIDE, outlier_mask
 from pose_io.readers import SIDECAR_NAME, parse_size
+from pose_io.resample import resample
 
 R_WRIST = BODY25.index("r_wrist")
 L_WRIST = BODY25.index("l_wrist")

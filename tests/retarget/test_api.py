@@ -5,9 +5,10 @@ import pytest
 import torch
 
 from pose_io import InputError, PoseTrack
-from pose_io.clean import hold_fill, resample, smooth_joints
+from pose_io.clean import hold_fill, smooth_joints
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.readers import read_track
+from pose_io.resample import resample
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.placement import placement_of

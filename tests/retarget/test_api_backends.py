@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from pose_io.clean import resample
 from pose_io.errors import InputError
+from pose_io.resample import resample
 from retarget.api import InferenceConfig, NumpyRetargeter, Retargeter, load_retargeter
 from tests.figures import tall_and_small, walking_figure
 

@@ -5,9 +5,9 @@ import pytest
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from pose_io.clean import resample
 from pose_io.feet import lock_feet
 from pose_io.readers import read_track
+from pose_io.resample import resample
 from pose_io.writers import write_track
 from retarget import api
 from retarget.batch import retarget_files

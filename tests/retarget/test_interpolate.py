@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from pose_io import InputError
-from pose_io.clean import resample
+from pose_io.resample import resample
 from pose_io.writers import write_track
 from retarget.api import InferenceConfig, ReferenceCodes, Retargeter, load_retargeter
 from retarget.interpolate import (

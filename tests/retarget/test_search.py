@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import torch
 
-from pose_io.clean import resample
 from pose_io.errors import InputError
+from pose_io.resample import resample
 from pose_io.track import PoseTrack
 from pose_io.writers import write_track
 from retarget.api import load_retargeter
