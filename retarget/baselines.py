@@ -21,7 +21,8 @@ from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
 from retarget.global_scale import apply_global_scale, scale_stats
 from retarget.placement import place, placement_of
-from retarget.preprocess import LAYOUT, ROOT, ROOT_INDEX, body15_track, filled_body15, to_body15
+from retarget.preprocess import LAYOUT, ROOT, ROOT_INDEX
+from retarget.tracks import body15_track, filled_body15, to_body15
 
 
 def _output(joints: np.ndarray, motion: PoseTrack, reference: PoseTrack) -> PoseTrack:

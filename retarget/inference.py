@@ -27,15 +27,8 @@ from pose_io.resample import resample, resampled_frames
 from pose_io.track import PoseTrack
 from retarget.network_config import min_frames
 from retarget.placement import Placement, placement_of, placement_shift, shifted
-from retarget.preprocess import (
-    LAYOUT,
-    NormStats,
-    PreprocessConfig,
-    canvas_scale,
-    channels_to_joints,
-    joints_to_channels,
-    prepare,
-)
+from retarget.preprocess import LAYOUT, NormStats, PreprocessConfig, channels_to_joints, joints_to_channels
+from retarget.tracks import canvas_scale, prepare
 from retarget.windows import pad_to_multiple, run_windowed, strided_starts
 
 # Refinement of the driver's motion code, chosen on the validation split (README, "Motion-code refinement").
@@ -379,7 +372,7 @@ class RetargeterBase:
     ) -> tuple[np.ndarray, float, np.ndarray]:
         """The network input [30, T'] float32 of a real track at ``rate`` (from :meth:`_network_rate`; None =
         its own), the scale to the canvas and its body15 joints [T, 15, 2] in its own pixels and frames
-        (:class:`retarget.preprocess.PreparedTrack`'s, whose canvas becomes x)."""
+        (:class:`retarget.tracks.PreparedTrack`'s, whose canvas becomes x)."""
         if rate is None:
             rate = self._network_rate(track, name, target=0.0)  # its own rate, its length checked
         prepared = prepare(track, self.preprocess, name, fps=rate)

@@ -27,7 +27,8 @@ from clone.cartoon.reference import character_lengths, estimate_yaw, framing_of,
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
 from retarget.baselines import global_scale_retarget
-from retarget.preprocess import LAYOUT, body15_track, filled_body15
+from retarget.preprocess import LAYOUT
+from retarget.tracks import body15_track, filled_body15
 
 log = logging.getLogger(__name__)
 

@@ -27,7 +27,8 @@ from clone.demo import demo_motions
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 from retarget.placement import Placement, place, placement_of
-from retarget.preprocess import LAYOUT, body15_track, to_body15
+from retarget.preprocess import LAYOUT
+from retarget.tracks import body15_track, to_body15
 from retarget.world.camera import Camera, facing_angle, ground_origin, project
 from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, resample, rest_pose, retarget_3d
 

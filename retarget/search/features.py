@@ -28,7 +28,8 @@ from pose_io.resample import resample
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
 from retarget.inference import NETWORK_FPS
-from retarget.preprocess import LAYOUT, LOCAL_INDEX, ROOT_INDEX, PreprocessConfig, prepare_track
+from retarget.preprocess import LAYOUT, LOCAL_INDEX, ROOT_INDEX, PreprocessConfig
+from retarget.tracks import prepare_track
 
 #: Frame rate every track is resampled to before encoding: the one the network was trained at.
 ENCODE_FPS = NETWORK_FPS

@@ -26,7 +26,7 @@ import numpy as np
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.preprocess import body15_track
+from retarget.tracks import body15_track
 from retarget.world import WorldSplit
 
 #: Candidates of its own clip every query keeps (so that its own clip can always be found and localised).

@@ -17,14 +17,8 @@ from pose_io.measures import skeleton_heights
 from pose_io.track import PoseTrack
 from retarget.augment import COMBOS
 from retarget.model import variant_config
-from retarget.preprocess import (
-    LAYOUT,
-    LOCAL_INDEX,
-    NormStats,
-    PreprocessConfig,
-    prepare_track,
-    row_statistics,
-)
+from retarget.preprocess import LAYOUT, LOCAL_INDEX, NormStats, PreprocessConfig, row_statistics
+from retarget.tracks import prepare_track
 from retarget.training.config import TrainConfig
 from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
 

@@ -12,7 +12,7 @@ from pose_io.resample import resample
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.placement import placement_of
-from retarget.preprocess import to_body15
+from retarget.tracks import to_body15
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,8 @@ from retarget.baselines import global_scale_retarget
 from retarget.checkpoint import KIND, load_weights
 from retarget.model import VARIANTS
 from retarget.placement import placement_of
-from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15
+from retarget.preprocess import LAYOUT, ROOT_INDEX
+from retarget.tracks import filled_body15
 from tests.figures import tall_and_small, walking_figure
 
 

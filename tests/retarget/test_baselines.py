@@ -5,7 +5,8 @@ from pose_io import InputError
 from pose_io.clean import hold_fill
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from retarget.baselines import global_scale_retarget, limb_scale_retarget
-from retarget.preprocess import LAYOUT, to_body15
+from retarget.preprocess import LAYOUT
+from retarget.tracks import to_body15
 from tests.figures import tall_and_small
 
 

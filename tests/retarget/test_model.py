@@ -13,13 +13,8 @@ from retarget.model import (
     min_frames,
     variant_config,
 )
-from retarget.preprocess import (
-    NormStats,
-    PreprocessConfig,
-    channels_to_joints,
-    joints_to_channels,
-    prepare_track,
-)
+from retarget.preprocess import NormStats, PreprocessConfig, channels_to_joints, joints_to_channels
+from retarget.tracks import prepare_track
 
 CLIPS = ("tall_man", "small_man")
 

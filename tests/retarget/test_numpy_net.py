@@ -115,7 +115,8 @@ def official_exports(shared_dir, tmp_path_factory):
 @pytest.mark.parametrize("clip", ["tall_man", "small_man"])
 def test_authors_weights_reproduce_their_self_reconstruction(official_exports, shared_dir, clip):
     from pose_io.readers import read_track
-    from retarget.preprocess import PreprocessConfig, channels_to_joints, joints_to_channels, prepare_track
+    from retarget.preprocess import PreprocessConfig, channels_to_joints, joints_to_channels
+    from retarget.tracks import prepare_track
 
     torch_weights, numpy_weights = official_exports["full"]
     track = read_track(shared_dir / "openpose_examples" / clip, image_size=(720, 720)).frames(0, 120)

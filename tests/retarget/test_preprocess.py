@@ -16,15 +16,12 @@ from retarget.preprocess import (
     NormStats,
     PreprocessConfig,
     channels_to_joints,
-    filled_body15,
     joints_to_channels,
     pose_channels,
-    prepare_track,
     row_statistics,
-    to_body15,
-    track_scale,
     velocity_channels,
 )
+from retarget.tracks import filled_body15, prepare_track, to_body15, track_scale
 
 CLIPS = ("tall_man", "small_man")
 
@@ -129,9 +126,9 @@ def test_outlier_joint_never_reaches_the_network(walking_track, caplog):
     joints = walking_track.joints.copy()
     joints[5, wrist] = (9000.0, 100.0)  # 13 image widths out: the constructor allows it, the body rule does not
     track = walking_track.replace(joints=joints)
-    with caplog.at_level(logging.WARNING, logger="retarget.preprocess"):
+    with caplog.at_level(logging.WARNING, logger="retarget.tracks"):
         body = to_body15(track, "driver.npz")
-    records = [r.getMessage() for r in caplog.records if r.name == "retarget.preprocess"]
+    records = [r.getMessage() for r in caplog.records if r.name == "retarget.tracks"]
     assert len(records) == 1 and records[0].startswith("driver.npz: dropped 1 outlier joint")
     assert body.missing[5, LAYOUT.index("r_wrist")] and body.missing.sum() == 1
     filled = filled_body15(track)

@@ -2,7 +2,7 @@ import numpy as np
 
 from clone.cartoon import CartoonLook, Palette, cartoon_frames, draw_cartoon
 from clone.cartoon.draw import scene
-from retarget.preprocess import body15_track, filled_body15
+from retarget.tracks import body15_track, filled_body15
 from tests.figures import walking_figure
 
 

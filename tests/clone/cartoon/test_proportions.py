@@ -3,7 +3,8 @@ import pytest
 
 from clone.cartoon.proportions import displacement, held_limbs, hold_lengths, proportion_error, tree_order
 from pose_io.measures import limb_lengths
-from retarget.preprocess import LAYOUT, ROOT_INDEX, filled_body15
+from retarget.preprocess import LAYOUT, ROOT_INDEX
+from retarget.tracks import filled_body15
 from tests.figures import walking_figure
 
 
