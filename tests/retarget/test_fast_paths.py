@@ -234,8 +234,7 @@ def test_a_body15_track_is_prepared_from_its_own_joints():
     """No converted copy of a track already in body15: its own (read-only) joints, the numbers of its body25
     original's conversion."""
     from retarget.preprocess import PreprocessConfig
-    from retarget.tracks import _body15_joints
-    from retarget.tracks import prepare
+    from retarget.tracks import _body15_joints, prepare
     from tests.figures import walking_figure
 
     body25 = walking_figure(80, dropped=0.1, always_seen=("mid_hip", "l_ankle", "r_ankle"), seed=3)
