@@ -16,6 +16,7 @@ import typer
 
 from clone.cli.choices import OutputFormat, Split
 from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, user_errors
+from clone.cli.retarget_cloning import eval_cloning
 from clone.cli.retarget_train import train
 from retarget.inference import REFINE_STEPS  # numpy and pose_io only, which the command line loads anyway
 
@@ -285,6 +286,9 @@ def evaluate(
         )
     typer.echo(table)
     console.print(f"wrote {out}: eval.json, eval.md and {len(doc['silhouettes'])} code plots in {doc['seconds']:.0f} s")
+
+
+retarget_app.command("eval-cloning")(eval_cloning)
 
 
 @retarget_app.command("interpolate")

@@ -185,6 +185,15 @@ paths("retarget eval", EVAL[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out", ["{t}/
                                                                           "{t}/blocker/e"])
 add("retarget eval missing mocap", ["retarget", "eval", "--mocap", "{t}/nomocap", "--out", "{t}/e"])
 
+EVALC = ["retarget", "eval-cloning", "--mocap", "{t}/mocap", "--out", "{t}/clout", "--device", "cpu"]
+options("retarget eval-cloning", EVALC, [b.mocap_empty], {
+    "--clips": ["0", "-1", "nan", "999999999"], "--frames": ["15", "nan", "999999999"], "--threads": ["0"],
+    "--split": ["bogus"], "--compare": ["noequals", "=x"],
+})
+paths("retarget eval-cloning", EVALC[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out", ["{t}/olddir", "{t}/old.npz",
+                                                                                   "{t}/blocker/e"])
+add("retarget eval-cloning missing mocap", ["retarget", "eval-cloning", "--mocap", "{t}/nomocap", "--out", "{t}/e"])
+
 INTERP = ["retarget", "interpolate", "{t}/poses.npz", "{t}/poses.npz", "--out", "{t}/grid.npz", "--device", "cpu"]
 options("retarget interpolate", INTERP, [b.poses_npz], {
     "--steps": ["1", "17", "nan"], "--frames": ["7", "-1", "999999999999"], "--cell": ["31", "513"],

@@ -1,0 +1,104 @@
+"""`clone retarget eval-cloning`: retargeting weights scored on the demo's pairs over a split's motions.
+
+torch is imported inside the command so that `clone --help` stays fast.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from clone.cli.choices import Split
+from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, user_errors
+
+MAX_CLIPS = 100_000
+MAX_FRAMES = 100_000
+
+
+@user_errors
+def eval_cloning(
+    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the world is built from.")],
+    out: Annotated[Path, typer.Option("--out", help="Folder to write: cloning.json, cloning.md.")],
+    weights: Annotated[
+        Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights).")
+    ] = None,
+    compare: Annotated[
+        list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
+    ] = None,
+    split: Annotated[
+        Split, typer.Option("--split", parser=Split, help="World split whose clips drive (tune on val).")
+    ] = Split.VAL,
+    clips: Annotated[int | None, typer.Option("--clips", help="Use at most this many clips (default: all).")] = None,
+    frames: Annotated[int, typer.Option("--frames", help="Frames per case (the demo's: 100).")] = 100,
+    world_seed: Annotated[
+        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
+    ] = 0,
+    cache: Annotated[
+        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
+    ] = None,
+    threads: Annotated[int | None, typer.Option("--threads", help="CPU threads (default: the free cores).")] = None,
+    device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
+) -> None:
+    """Pose error of retargeting weights on `clone demo`'s three pairs built from every clip of a split.
+
+    Each usable clip of the split gives the demo's drivers (the child at +30°, the reference's own body at -30°,
+    the child at -30°) and their ground truth (the demo's reference character at +30°); every driver is moved onto
+    the demo's reference track as `clone drive` does it. Global scaling is scored on the same cases.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from clone.demo import validation
+    from clone.demo.config import DemoConfig
+    from clone.outputs import FOLDER, check_number, check_output
+    from pose_io.atomic import atomic_dir
+    from pose_io.errors import InputError
+    from retarget.api import PACKAGED_WEIGHTS
+    from retarget.runtime import configure_threads
+    from retarget.world import MotionWorld
+
+    check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    check_number("--clips", clips, 1, MAX_CLIPS)
+    check_number("--frames", frames, 16, MAX_FRAMES)
+    check_number("--threads", threads, 1, MAX_THREADS)
+    if not mocap.is_dir():
+        raise InputError(f"--mocap {mocap}: no such folder")
+    networks: dict[str, Path | None] = {"ours": weights}
+    for item in compare or []:
+        name, sep, path = item.partition("=")
+        if not sep or not name.strip() or not path:
+            raise InputError(f"--compare {item!r}: expected NAME=PATH")
+        if name.strip() in (*networks, "global scaling (EDN)"):
+            raise InputError(f"--compare {name.strip()}: that row name is taken; choose another")
+        networks[name.strip()] = Path(path)
+    configure_threads(threads)
+    world = MotionWorld.build(mocap, cache, seed=world_seed)
+    config = DemoConfig()
+    reference = validation.reference_track(config)
+    methods = {name: validation.network_drive(path, reference, device) for name, path in networks.items()}
+    methods["global scaling (EDN)"] = validation.global_scale_drive(reference)
+    cases = validation.cloning_cases(world.split(split.value).clips, mocap, frames, clips, config,
+                                     world.config.fps)  # fmt: skip
+    with Progress(TextColumn("[bold]eval-cloning"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                  console=console, transient=True) as bar:  # fmt: skip
+        task = bar.add_task("cases", total=len(cases))
+        errors = validation.score(cases, methods, lambda done, _: bar.update(task, completed=done))
+    doc = validation.summarise(cases, errors, "ours")
+    doc.update({
+        "split": split.value, "frames": frames, "baseline": "ours",
+        "weights": {name: str(path or PACKAGED_WEIGHTS) for name, path in networks.items()},
+        "pairs": "; ".join(f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs),
+        "reference": f"{config.reference_character} performing the built-in {config.reference_motion!r} motion at "
+                     f"{config.reference_yaw:+g}°, {len(reference)} frames",
+        "case_list": [{"clip": c.clip, "kind": c.kind, **{n: float(e[k]) for n, e in errors.items()}}
+                      for k, c in enumerate(cases)],
+    })  # fmt: skip
+    table = validation.markdown(doc)
+    with atomic_dir(out, overwrite=overwrite) as tmp:
+        (tmp / "cloning.json").write_text(json.dumps(doc, indent=2))
+        (tmp / "cloning.md").write_text(table)
+    typer.echo(table)
+    console.print(f"wrote {out}: cloning.json, cloning.md ({doc['cases']} cases from {doc['clips']} clips)")

@@ -1,0 +1,209 @@
+"""The demo's pairs on many motions: a cloning-kind measure of retargeting weights (`clone retarget eval-cloning`).
+
+`clone demo` scores three drivers of one motion each. Here every clip of a motion-world split that is long enough
+becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at +30°, the reference's own body at
+-30°, the child at -30°), each with its ground truth: the demo's reference character performing the clip, seen by
+the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. Every driver is moved
+onto the demo's reference track (the reference character performing the built-in reference motion, as the demo
+renders it) the way `clone drive` does: the network with the reference's skeleton and view codes, then the foot
+skating cleaned with the driver's contacts (:func:`pose_io.feet.lock_feet`). The score is the demo's pose error,
+the RMSE of the MidHip-aligned joints in % of the ground truth's height (:func:`clone.metrics.gt_pose_scores`);
+where the reference stands is left out (the stage fit moves a whole track at once and needs a trained model).
+Everybody Dance Now's global scaling is scored on the same pairs.
+
+Why it exists: the world's eval cases (`clone retarget eval`: 64-frame windows, any view and pitch, a 64-frame
+reference) rank checkpoints in an order cloning does not follow; this measure follows the demo.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from clone.demo.config import DemoConfig
+from pose_io.errors import InputError
+from pose_io.track import PoseTrack
+
+log = logging.getLogger(__name__)
+
+Drive = Callable[[PoseTrack], PoseTrack]  # driver track -> driven track in the reference's pixels
+
+# The demo whose pairs are copied (frozen, so a shared default is safe).
+DEMO = DemoConfig()
+# Clip frames before a case starts (mocap clips often open in a T-pose or a still stand).
+CASE_START = 15
+
+
+@dataclass(frozen=True)
+class CloningCase:
+    """One driver and its ground truth.
+
+    Attributes:
+        clip: the clip's name in the split.
+        kind: the demo pair it copies (``proportions``, ``view``, ``both``).
+        driver: the driver's body15 track (gaps of up to 5 frames filled).
+        truth: the reference character performing the same frames, seen by the reference's camera (body15).
+    """
+
+    clip: str
+    kind: str
+    driver: PoseTrack
+    truth: PoseTrack
+
+
+def reference_track(config: DemoConfig = DEMO) -> PoseTrack:
+    """The demo's reference video's poses (BODY_25), as `clone demo` renders them (no frames are drawn)."""
+    from clone.demo.scenes import demo_motions
+    from clone.synth import get_character
+    from clone.synth.performance import render_performance
+
+    skeleton, look, _ = get_character(config.reference_character)
+    motion = demo_motions()[config.reference_motion]
+    return render_performance(motion, skeleton, look, yaw=config.reference_yaw, size=config.render_size,
+                              frames=config.reference_frames)[1]  # fmt: skip
+
+
+def cloning_cases(
+    clips: Sequence[Mapping], mocap: str | Path, frames: int = 100, limit: int | None = None,
+    config: DemoConfig = DEMO, fps: float = 30.0,
+) -> list[CloningCase]:  # fmt: skip
+    """The demo's pairs on every usable clip, clips in the given order, at most ``limit`` of them.
+
+    Args:
+        clips: the split's clips (``WorldSplit.clips``: ``name``, ``path`` relative to ``mocap``, ``frames``).
+        mocap: the motion-capture folder.
+        frames: frames of a case, from frame :data:`CASE_START` of its clip.
+        limit: the most clips to use (None: all).
+        config: the demo whose reference and pairs are copied.
+        fps: the world's frame rate.
+
+    Raises:
+        InputError: no clip long enough whose ground truth stays inside the frame.
+    """
+    from clone.demo.scenes import edge_distance
+    from clone.synth import get_character
+    from clone.synth.performance import render_performance
+    from pose_io.clean import fill_gaps
+    from retarget.world import load_motion
+
+    margin = config.edge_margin * config.render_size
+    ref_skeleton, ref_look, _ = get_character(config.reference_character)
+    cases: list[CloningCase] = []
+    used = 0
+    for clip in clips:
+        if limit is not None and used >= limit:
+            break
+        if clip["frames"] < CASE_START + frames:
+            continue
+        motion = load_motion(Path(mocap) / clip["path"], fps=fps)
+        window = {"size": config.render_size, "start": CASE_START, "frames": frames}
+        truth = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, **window)[1]
+        if edge_distance(truth) < margin:
+            continue
+        used += 1
+        for pair in config.pairs:
+            skeleton, look, _ = get_character(pair.character)
+            driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
+            cases.append(CloningCase(clip["name"], pair.name, fill_gaps(driver.to_layout("body15"), 5)[0],
+                                     truth.to_layout("body15")))  # fmt: skip
+    if not cases:
+        raise InputError(f"no clip of at least {CASE_START + frames} frames whose ground truth stays inside the frame")
+    log.info("%d cloning cases from %d clips", len(cases), used)
+    return cases
+
+
+def network_drive(weights: str | Path | None, reference: PoseTrack, device: str = "cpu") -> Drive:
+    """Retargeting onto ``reference`` with ``weights`` (None: the shipped ones), foot skating cleaned."""
+    from pose_io.feet import lock_feet
+    from retarget.api import load_retargeter
+
+    net = load_retargeter(weights, device=device)
+    codes = net.reference_codes(reference)
+    return lambda driver: lock_feet(net.retarget(driver, codes), driver)
+
+
+def global_scale_drive(reference: PoseTrack) -> Drive:
+    """Everybody Dance Now's global scaling onto ``reference`` (as `clone drive --method global-scale`)."""
+    from retarget.global_scale import apply_global_scale, scale_stats
+
+    target = scale_stats(reference.joints, reference.joint_layout)
+
+    def drive(driver: PoseTrack) -> PoseTrack:
+        layout = driver.joint_layout
+        joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), target)
+        return driver.replace(joints=joints, image_size=reference.image_size)
+
+    return drive
+
+
+def case_error(driven: PoseTrack, truth: PoseTrack) -> float:
+    """The demo's pose error: RMSE of the MidHip-aligned joints in % of the truth's height."""
+    from clone.metrics import gt_pose_scores
+    from pose_io.measures import skeleton_height
+
+    driven = driven.to_layout(truth.layout)
+    height = skeleton_height(truth.joints, truth.layout)
+    return float(gt_pose_scores(driven.joints, truth.joints, height, layout=truth.layout).summary["pose_rmse_pct"])
+
+
+def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
+          progress: Callable[[int, int], None] | None = None) -> dict[str, np.ndarray]:  # fmt: skip
+    """Row -> [N] pose errors (% of height) of every case, in the order of ``cases``."""
+    errors = {name: np.empty(len(cases)) for name in methods}
+    for k, case in enumerate(cases):
+        for name, drive in methods.items():
+            errors[name][k] = case_error(drive(case.driver), case.truth)
+        if progress is not None:
+            progress(k + 1, len(cases))
+    return errors
+
+
+def summarise(cases: Sequence[CloningCase], errors: Mapping[str, np.ndarray], baseline: str) -> dict:
+    """Per row and pair kind the mean error ± its standard error, and the paired difference to ``baseline``."""
+    kinds = list(dict.fromkeys(c.kind for c in cases))
+    masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds}, "all": np.ones(len(cases), bool)}
+
+    def stats(values: np.ndarray) -> dict[str, float]:
+        se = float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+        return {"mean": float(values.mean()), "se": se}
+
+    rows = {}
+    for name, e in errors.items():
+        rows[name] = {k: stats(e[m]) for k, m in masks.items()}
+        rows[name]["vs_" + baseline] = {k: stats(e[m] - errors[baseline][m]) for k, m in masks.items()}
+    return {"cases": len(cases), "clips": len({c.clip for c in cases}), "kinds": kinds, "rows": rows}
+
+
+def markdown(doc: Mapping) -> str:
+    """cloning.md: one table (rows by method, pair kinds across), then the paired differences."""
+    kinds = [*doc["kinds"], "all"]
+    base = doc["baseline"]
+    lines = ["# Cloning-kind evaluation", "",
+             (f"{doc['cases']} cases from {doc['clips']} clips of the {doc['split']} split, {doc['frames']} frames "
+              "each; pose error (RMSE of the MidHip-aligned joints, % of the ground truth's height), mean ± "
+              "standard error."), "",
+             "| method | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]  # fmt: skip
+    for name, row in doc["rows"].items():
+        lines.append(f"| {name} | " + " | ".join(f"{row[k]['mean']:.2f} ± {row[k]['se']:.2f}" for k in kinds) + " |")
+    lines += ["", f"Paired difference to {base} (negative: lower error):", "",
+              "| method | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]  # fmt: skip
+    for name, row in doc["rows"].items():
+        if name != base:
+            diff = row["vs_" + base]
+            lines.append(f"| {name} | " + " | ".join(f"{diff[k]['mean']:+.3f} ± {diff[k]['se']:.3f}" for k in kinds)
+                         + " |")  # fmt: skip
+    lines += ["", "Notes:", "",
+              f"- Drivers: {doc['pairs']}. Reference: {doc['reference']}.",
+              ("- Networks run as `clone drive` runs them (motion codes refined, foot skating cleaned with the "
+               "driver's contacts); where the reference stands is not scored.")]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+__all__ = [
+    "CASE_START", "DEMO", "CloningCase", "case_error", "cloning_cases", "global_scale_drive", "markdown", "network_drive",
+    "reference_track", "score", "summarise",
+]
