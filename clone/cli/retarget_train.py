@@ -181,8 +181,8 @@ def train(
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,
-                             cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective,
-                                                  frontal=frontal_share))
+                             cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective),
+                             frontal_share=frontal_share)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

@@ -13,6 +13,7 @@ number of processes. On CUDA the network runs in bfloat16 autocast (``amp``).
 The split interface used here (the motion world provides it)::
 
     split.num_motions, split.num_characters, split.num_views
+    split.views  # yaw of each view bin (degrees); read only with TrainConfig.frontal_share
     split.window(motion, character, view, length=64, offset=0, rng=None) -> [length, 15, 2] float32
     split.window(..., cameras=CameraSpread(...))  # only when TrainConfig.cameras is not the world's
 

@@ -47,6 +47,11 @@ class TrainConfig:
         body_normalise: bring every character to one skeleton height in training, and every track to it at
             inference, instead of scaling by the image height (the target height is that of the initial
             weights' mean pose, or the median character's; stored in the checkpoint's preprocessing).
+        extra_characters: training characters added to the world's, from their own random draws.
+        extra_spread: factor on the extra characters' proportion spread.
+        frontal_share: share of training samples whose two views are both drawn from the bins within
+            ``retarget.world.camera.FRONTAL_YAW`` (45°) of the front, the views of most videos; validation keeps
+            every view.
     """
 
     variant: str = "full"
@@ -68,6 +73,7 @@ class TrainConfig:
     body_normalise: bool = True
     extra_characters: int = 0
     extra_spread: float = 1.0
+    frontal_share: float = 0.0
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -75,6 +81,8 @@ class TrainConfig:
             raise ValueError("window must be a multiple of 8 and at least every clip length")
         if self.batch_size <= 0:
             raise ValueError("batch_size must be positive")
+        if not 0 <= self.frontal_share <= 1:
+            raise ValueError("frontal_share must be a share in [0, 1]")
 
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict (lists for tuples)."""

@@ -3,7 +3,6 @@ scales, the validation set and the data loader of one epoch."""
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Iterator, Sequence
 from typing import Protocol
@@ -56,14 +55,15 @@ class CrossSamples(Dataset):
         scales: optional [C] factor per character (body-height normalisation), applied about the origin.
         cameras: how each view slot's camera is drawn (default: the world's own). With another spread and
             ``scales``, a window is brought to ``height`` by its own skeleton height instead, as inference
-            brings a track: a steep or near camera changes how tall a character looks. Its ``frontal`` share
-            of samples draws its views from the bins within :data:`FRONTAL_YAW` of the front.
+            brings a track: a steep or near camera changes how tall a character looks.
         height: the skeleton height (canvas pixels) ``scales`` bring characters to.
+        frontal: share of samples whose views are both drawn from the bins within :data:`FRONTAL_YAW` of the
+            front (the split's ``views`` give the bins' yaws); the others draw from every bin.
     """
 
     def __init__(
         self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None,
-        cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None,
+        cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None, frontal: float = 0.0,
     ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
@@ -74,10 +74,8 @@ class CrossSamples(Dataset):
         self.seed = seed
         self.scales = scales
         self.cameras = cameras
-        # Only a non-default spread is passed on: any WorldSplit (and test doubles) takes the default. The
-        # frontal share picks view bins, not the camera of a window.
-        window_cameras = dataclasses.replace(cameras, frontal=0.0)
-        self._camera_kwargs = {} if window_cameras == WORLD_CAMERAS else {"cameras": window_cameras}
+        # Only a non-default spread is passed on: any WorldSplit (and test doubles) takes the default.
+        self._camera_kwargs = {} if cameras == WORLD_CAMERAS else {"cameras": cameras}
         self.own_height = bool(self._camera_kwargs) and scales is not None
         if self.own_height and not (height is not None and height > 0):
             raise ValueError("a camera spread with body scales needs the target height")
@@ -85,8 +83,11 @@ class CrossSamples(Dataset):
         self.epoch = 0
         self.vary_character = config.body_channels is not None and split.num_characters > 1
         self.vary_view = config.view_channels is not None and split.num_views > 1
+        if not 0 <= frontal <= 1:
+            raise ValueError("frontal must be a share in [0, 1]")
+        self.frontal = frontal
         self.frontal_views = np.arange(split.num_views)
-        if cameras.frontal > 0:
+        if frontal > 0:
             self.frontal_views = np.flatnonzero(np.abs(np.asarray(split.views)) <= FRONTAL_YAW)
             need = 2 if self.vary_view else 1
             if len(self.frontal_views) < need:
@@ -102,7 +103,7 @@ class CrossSamples(Dataset):
         motions = rng.choice(self.split.num_motions, 2, replace=False)
         chars = _pair(rng, self.split.num_characters, self.vary_character)
         # Without a frontal share no extra number is drawn: runs before it draw the same samples.
-        if self.cameras.frontal > 0 and rng.random() < self.cameras.frontal:
+        if self.frontal > 0 and rng.random() < self.frontal:
             views = self.frontal_views[_pair(rng, len(self.frontal_views), self.vary_view)]
         else:
             views = _pair(rng, self.split.num_views, self.vary_view)

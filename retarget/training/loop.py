@@ -229,7 +229,8 @@ def fit(
 
     size = config.samples_per_epoch
     dataset = CrossSamples(
-        train_split, config.window, config.variant, size, config.seed, scales, config.cameras, preprocess.body_height
+        train_split, config.window, config.variant, size, config.seed, scales, config.cameras, preprocess.body_height,
+        config.frontal_share,
     )
     steps_per_epoch = max(1, size // config.batch_size)
     val = None

@@ -75,24 +75,18 @@ class CameraSpread:
         perspective: share of cameras at a finite distance (perspective); the others are weak-perspective.
         near: closest distance (metres) of a perspective camera from the nearest joint of its window.
         far: farthest such distance; uniform in [near, far].
-        frontal: share of training samples whose views are all drawn from the view bins within
-            :data:`FRONTAL_YAW` of the front (the others from every bin). Not a camera of a window: it weights
-            which view bins samples take (``retarget.training.data.CrossSamples``).
     """
 
     max_pitch: float = MAX_PITCH
     perspective: float = 0.0
     near: float = 2.0
     far: float = 8.0
-    frontal: float = 0.0
 
     def __post_init__(self) -> None:
         if not 0 <= self.max_pitch < 90:
             raise ValueError("max_pitch must be in [0, 90) degrees")
         if not 0 <= self.perspective <= 1:
             raise ValueError("perspective must be a share in [0, 1]")
-        if not 0 <= self.frontal <= 1:
-            raise ValueError("frontal must be a share in [0, 1]")
         if not 0.5 <= self.near <= self.far <= 1000:
             raise ValueError("camera distances must be 0.5 <= near <= far <= 1000 metres")
 
