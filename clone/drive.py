@@ -39,7 +39,7 @@ from clone.tensors import to_images, to_tensor
 from pose_io.atomic import check_new_output
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.global_scale import apply_global_scale, scale_stats
+from retarget.global_scale import ScaleStats, apply_global_scale, scale_stats
 
 log = logging.getLogger(__name__)
 
@@ -125,9 +125,14 @@ def global_scale_onto(driver: PoseTrack, model: ReferenceModel) -> PoseTrack:
     if model.scale_stats is None:
         raise InputError("the reference never shows its ankles, so --method global-scale is not available; "
                          "use --method retarget or none")
+    return global_scale_to(driver, model.scale_stats, model.canvas.image_size)
+
+
+def global_scale_to(driver: PoseTrack, target: ScaleStats, image_size: tuple[int, int]) -> PoseTrack:
+    """The driver moved and scaled per frame onto a reference's scale statistics, in its ``image_size``."""
     layout = driver.joint_layout
-    joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), model.scale_stats)
-    return driver.replace(joints=joints, image_size=model.canvas.image_size)
+    joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), target)
+    return driver.replace(joints=joints, image_size=image_size)
 
 
 def drive_poses(
@@ -163,15 +168,28 @@ def drive_poses(
         return driver.replace(image_size=model.canvas.image_size), None
     if method is Method.RETARGET:
         driven = retarget_onto(driver, model, weights, device)
-        if foot_lock:
-            from pose_io.feet import lock_feet
-
-            driven = lock_feet(driven, driver)
     else:
         driven = global_scale_onto(driver, model)
-    if stage is StageMode.RAW:
+    return finish_driven(driven, driver, model.reference_track, method is Method.RETARGET, stage, foot_lock)
+
+
+def finish_driven(
+    driven: PoseTrack, driver: PoseTrack, reference: PoseTrack, retargeted: bool,
+    stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+) -> tuple[PoseTrack, StageFit | None]:  # fmt: skip
+    """What follows moving the driver onto the reference: a retargeted track's foot skating cleaned with the
+    driver's contacts (``foot_lock``), then the whole track kept on the reference's stage (``stage``).
+
+    Returns:
+        ``(track, fit)`` as :func:`drive_poses`.
+    """
+    if retargeted and foot_lock:
+        from pose_io.feet import lock_feet
+
+        driven = lock_feet(driven, driver)
+    if StageMode(stage) is StageMode.RAW:
         return driven, None
-    return fit_to_stage(driven, model.reference_track)
+    return fit_to_stage(driven, reference)
 
 
 def move_onto_reference(

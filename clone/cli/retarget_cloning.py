@@ -52,7 +52,7 @@ def eval_cloning(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from clone.demo import validation
-    from clone.demo.config import DemoConfig
+    from clone.demo.scenes import reference_track
     from clone.outputs import FOLDER, check_number, check_output
     from pose_io.atomic import atomic_dir
     from pose_io.errors import InputError
@@ -75,11 +75,12 @@ def eval_cloning(
             raise InputError(f"--compare {name.strip()}: that row name is taken; choose another")
         networks[name.strip()] = Path(path)
     configure_threads(threads)
-    world = MotionWorld.build(mocap, cache, seed=world_seed)
-    config = DemoConfig()
-    reference = validation.reference_track(config)
+    config = validation.DEMO
+    reference = reference_track(config)
+    # Weights and device are checked before the world is built.
     methods = {name: validation.network_drive(path, reference, device) for name, path in networks.items()}
     methods["global scaling (EDN)"] = validation.global_scale_drive(reference)
+    world = MotionWorld.build(mocap, cache, seed=world_seed)
     cases = validation.cloning_cases(world.split(split.value).clips, mocap, frames, clips, config,
                                      world.config.fps)  # fmt: skip
     with Progress(TextColumn("[bold]eval-cloning"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),

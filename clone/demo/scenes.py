@@ -62,6 +62,22 @@ def ground_truth_track(config: DemoConfig, pair: PairConfig, motions: dict[str, 
     return track
 
 
+def reference_track(config: DemoConfig, motions: dict[str, object] | None = None) -> PoseTrack:
+    """The exact BODY_25 poses of the demo's reference video (no frames are rendered)."""
+    from clone.synth import get_character
+    from clone.synth.performance import render_performance
+
+    skeleton, look, _ = get_character(config.reference_character)
+    motion = _motion(motions or demo_motions(), config.reference_motion)
+    return render_performance(motion, skeleton, look, yaw=config.reference_yaw, size=config.render_size,
+                              frames=config.reference_frames)[1]  # fmt: skip
+
+
+def stays_in_frame(config: DemoConfig, track: PoseTrack) -> bool:
+    """Whether every present joint of ``track`` keeps the configured margin from the frame's edges."""
+    return edge_distance(track) >= config.edge_margin * config.render_size
+
+
 def edge_distance(track: PoseTrack) -> float:
     """How close the track comes to the frame's edges: the smallest distance in pixels of any present joint
     in any frame to the nearest edge (pixel centres 0 .. size - 1); negative when a joint is outside."""
@@ -81,7 +97,7 @@ def check_in_frame(config: DemoConfig, pair: PairConfig, track: PoseTrack) -> fl
     """
     margin = config.edge_margin * config.render_size
     distance = edge_distance(track)
-    if distance < margin:
+    if not stays_in_frame(config, track):
         log.warning("the ground truth of %s comes %.0f px from the frame's edge (less than the %.0f px margin): "
                     "part of the person leaves the frame", pair.name, distance, margin)
     else:

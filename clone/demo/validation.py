@@ -4,12 +4,12 @@
 becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at +30°, the reference's own body at
 -30°, the child at -30°), each with its ground truth: the demo's reference character performing the clip, seen by
 the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. Every driver is moved
-onto the demo's reference track (the reference character performing the built-in reference motion, as the demo
-renders it) the way `clone drive` does: the network with the reference's skeleton and view codes, then the foot
-skating cleaned with the driver's contacts (:func:`pose_io.feet.lock_feet`). The score is the demo's pose error,
-the RMSE of the MidHip-aligned joints in % of the ground truth's height (:func:`clone.metrics.gt_pose_scores`);
-where the reference stands is left out (the stage fit moves a whole track at once and needs a trained model).
-Everybody Dance Now's global scaling is scored on the same pairs.
+onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
+with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track kept
+on the reference's stage (:func:`clone.drive.finish_driven`). The score is the demo's primary measure, the RMSE of
+the MidHip-aligned joints in % of the ground truth's height (:func:`clone.metrics.track_gt_scores`). Everybody
+Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.global_scale_to`, then the
+stage).
 
 Why it exists: the world's eval cases (`clone retarget eval`: 64-frame windows, any view and pitch, a 64-frame
 reference) rank checkpoints in an order cloning does not follow; this measure follows the demo.
@@ -27,6 +27,7 @@ import numpy as np
 from clone.demo.config import DemoConfig
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget.evaluate.scores import mean_se
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ class CloningCase:
     """One driver and its ground truth.
 
     Attributes:
-        clip: the clip's name in the split.
+        clip: the clip's path in the mocap folder (as the split lists it).
         kind: the demo pair it copies (``proportions``, ``view``, ``both``).
         driver: the driver's body15 track (gaps of up to 5 frames filled).
         truth: the reference character performing the same frames, seen by the reference's camera (body15).
@@ -53,18 +54,6 @@ class CloningCase:
     kind: str
     driver: PoseTrack
     truth: PoseTrack
-
-
-def reference_track(config: DemoConfig = DEMO) -> PoseTrack:
-    """The demo's reference video's poses (BODY_25), as `clone demo` renders them (no frames are drawn)."""
-    from clone.demo.scenes import demo_motions
-    from clone.synth import get_character
-    from clone.synth.performance import render_performance
-
-    skeleton, look, _ = get_character(config.reference_character)
-    motion = demo_motions()[config.reference_motion]
-    return render_performance(motion, skeleton, look, yaw=config.reference_yaw, size=config.render_size,
-                              frames=config.reference_frames)[1]  # fmt: skip
 
 
 def cloning_cases(
@@ -84,13 +73,12 @@ def cloning_cases(
     Raises:
         InputError: no clip long enough whose ground truth stays inside the frame.
     """
-    from clone.demo.scenes import edge_distance
+    from clone.demo.scenes import stays_in_frame
     from clone.synth import get_character
     from clone.synth.performance import render_performance
     from pose_io.clean import fill_gaps
     from retarget.world import load_motion
 
-    margin = config.edge_margin * config.render_size
     ref_skeleton, ref_look, _ = get_character(config.reference_character)
     cases: list[CloningCase] = []
     used = 0
@@ -102,13 +90,13 @@ def cloning_cases(
         motion = load_motion(Path(mocap) / clip["path"], fps=fps)
         window = {"size": config.render_size, "start": CASE_START, "frames": frames}
         truth = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, **window)[1]
-        if edge_distance(truth) < margin:
+        if not stays_in_frame(config, truth):
             continue
         used += 1
         for pair in config.pairs:
             skeleton, look, _ = get_character(pair.character)
             driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
-            cases.append(CloningCase(clip["name"], pair.name, fill_gaps(driver.to_layout("body15"), 5)[0],
+            cases.append(CloningCase(clip["path"], pair.name, fill_gaps(driver.to_layout("body15"), 5)[0],
                                      truth.to_layout("body15")))  # fmt: skip
     if not cases:
         raise InputError(f"no clip of at least {CASE_START + frames} frames whose ground truth stays inside the frame")
@@ -117,37 +105,34 @@ def cloning_cases(
 
 
 def network_drive(weights: str | Path | None, reference: PoseTrack, device: str = "cpu") -> Drive:
-    """Retargeting onto ``reference`` with ``weights`` (None: the shipped ones), foot skating cleaned."""
-    from pose_io.feet import lock_feet
+    """`clone drive --method retarget` onto ``reference`` with ``weights`` (None: the shipped ones)."""
+    from clone.drive import finish_driven
     from retarget.api import load_retargeter
 
     net = load_retargeter(weights, device=device)
     codes = net.reference_codes(reference)
-    return lambda driver: lock_feet(net.retarget(driver, codes), driver)
+    return lambda driver: finish_driven(net.retarget(driver, codes), driver, reference, retargeted=True)[0]
 
 
 def global_scale_drive(reference: PoseTrack) -> Drive:
-    """Everybody Dance Now's global scaling onto ``reference`` (as `clone drive --method global-scale`)."""
-    from retarget.global_scale import apply_global_scale, scale_stats
+    """`clone drive --method global-scale` onto ``reference`` (Everybody Dance Now's global scaling)."""
+    from clone.drive import finish_driven, global_scale_to
+    from retarget.global_scale import scale_stats
 
     target = scale_stats(reference.joints, reference.joint_layout)
 
     def drive(driver: PoseTrack) -> PoseTrack:
-        layout = driver.joint_layout
-        joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), target)
-        return driver.replace(joints=joints, image_size=reference.image_size)
+        scaled = global_scale_to(driver, target, reference.image_size)
+        return finish_driven(scaled, driver, reference, retargeted=False)[0]
 
     return drive
 
 
 def case_error(driven: PoseTrack, truth: PoseTrack) -> float:
     """The demo's pose error: RMSE of the MidHip-aligned joints in % of the truth's height."""
-    from clone.metrics import gt_pose_scores
-    from pose_io.measures import skeleton_height
+    from clone.metrics import track_gt_scores
 
-    driven = driven.to_layout(truth.layout)
-    height = skeleton_height(truth.joints, truth.layout)
-    return float(gt_pose_scores(driven.joints, truth.joints, height, layout=truth.layout).summary["pose_rmse_pct"])
+    return float(track_gt_scores(driven.to_layout(truth.layout), truth).summary["pose_rmse_pct"])
 
 
 def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
@@ -168,8 +153,8 @@ def summarise(cases: Sequence[CloningCase], errors: Mapping[str, np.ndarray], ba
     masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds}, "all": np.ones(len(cases), bool)}
 
     def stats(values: np.ndarray) -> dict[str, float]:
-        se = float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
-        return {"mean": float(values.mean()), "se": se}
+        mean, se = mean_se(values)
+        return {"mean": mean, "se": se}
 
     rows = {}
     for name, e in errors.items():
@@ -198,12 +183,12 @@ def markdown(doc: Mapping) -> str:
                          + " |")  # fmt: skip
     lines += ["", "Notes:", "",
               f"- Drivers: {doc['pairs']}. Reference: {doc['reference']}.",
-              ("- Networks run as `clone drive` runs them (motion codes refined, foot skating cleaned with the "
-               "driver's contacts); where the reference stands is not scored.")]  # fmt: skip
+              ("- Every method runs as `clone drive` runs it (networks: motion codes refined, foot skating cleaned "
+               "with the driver's contacts; then the stage fit onto the reference's part of the frame).")]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
 __all__ = [
     "CASE_START", "DEMO", "CloningCase", "case_error", "cloning_cases", "global_scale_drive", "markdown", "network_drive",
-    "reference_track", "score", "summarise",
+    "score", "summarise",
 ]

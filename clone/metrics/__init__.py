@@ -19,6 +19,7 @@ from clone.metrics.poses import (
     limb_error,
     outside_frame,
     pose_scores,
+    track_gt_scores,
 )
 from clone.metrics.table import METRICS, MetricInfo, Scores, nan_mean, row_means
 
@@ -41,4 +42,5 @@ __all__ = [
     "person_box",
     "pose_scores",
     "row_means",
+    "track_gt_scores",
 ]

@@ -265,10 +265,16 @@ def evaluate_track(
         driven.joints, driven.image_size, reference_lengths, height, driven.layout, contact_window(driven.fps)
     )
     if gt is not None:
-        if len(gt) != len(driven):
-            raise InputError(f"ground-truth poses: {len(gt)} frames, driven track has {len(driven)}")
-        if gt.layout != driven.layout:
-            gt = gt.to_layout(driven.layout)
-        gt_height = skeleton_height(gt.joints, gt.layout)
-        scores = scores.merged(gt_pose_scores(driven.joints, gt.joints, gt_height, layout=driven.layout))
+        scores = scores.merged(track_gt_scores(driven, gt))
     return scores
+
+
+def track_gt_scores(driven: PoseTrack, gt: PoseTrack) -> Scores:
+    """:func:`gt_pose_scores` of a driven track against ground-truth poses of the same frames, normalised by the
+    ground truth's own height (the paper's "target's height"); ``gt`` is converted to ``driven``'s layout."""
+    if len(gt) != len(driven):
+        raise InputError(f"ground-truth poses: {len(gt)} frames, driven track has {len(driven)}")
+    if gt.layout != driven.layout:
+        gt = gt.to_layout(driven.layout)
+    gt_height = skeleton_height(gt.joints, gt.layout)
+    return gt_pose_scores(driven.joints, gt.joints, gt_height, layout=driven.layout)

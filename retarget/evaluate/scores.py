@@ -65,8 +65,12 @@ def summarise(scores: Sequence[CaseScores]) -> dict[str, dict[str, float]]:
     for align in ALIGNMENTS:
         entry: dict[str, float] = {}
         for metric in METRICS:
-            values = np.array([s[align][metric] for s in scores])
-            entry[metric] = float(values.mean())
-            entry[metric + "_se"] = float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+            entry[metric], entry[metric + "_se"] = mean_se(np.array([s[align][metric] for s in scores]))
         out[align] = entry
     return out
+
+
+def mean_se(values: np.ndarray) -> tuple[float, float]:
+    """The mean of [N] values and its standard error (0 for a single value)."""
+    se = float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+    return float(values.mean()), se

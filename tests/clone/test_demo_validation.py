@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from clone.cli.main import app
 from clone.demo import validation
 from clone.demo.config import PAIRS
-from clone.demo.scenes import edge_distance
+from clone.demo.scenes import edge_distance, reference_track
 from pose_io.errors import InputError
 from pose_io.measures import reference_limb_lengths
 from retarget.api import PACKAGED_WEIGHTS
@@ -55,7 +55,7 @@ def cases(world: MotionWorld, tiny_mocap: Path) -> list[validation.CloningCase]:
 def test_every_clip_gives_the_demos_three_pairs(world, tiny_mocap, cases) -> None:
     clips = world.split("val").clips
     used = list(dict.fromkeys(c.clip for c in cases))
-    assert used and set(used) <= {c["name"] for c in clips}
+    assert used and set(used) <= {c["path"] for c in clips}
     assert [c.kind for c in cases] == [p.name for p in PAIRS] * len(used)  # in the split's order, pair by pair
     margin = validation.DEMO.edge_margin * validation.DEMO.render_size
     for case in cases:
@@ -78,7 +78,7 @@ def test_scores_rank_the_shipped_network_over_global_scaling_and_an_untrained_on
     torch.manual_seed(0)
     untrained = save_checkpoint(tmp_path / "untrained.pt", RetargetNet(variant_config("full")),
                                 NormStats(np.zeros((15, 2)), np.full((15, 2), 50.0)))  # fmt: skip
-    reference = validation.reference_track()
+    reference = reference_track(validation.DEMO)
     methods = {
         "ours": validation.network_drive(None, reference),
         "same": validation.network_drive(PACKAGED_WEIGHTS, reference),
