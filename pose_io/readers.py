@@ -68,7 +68,7 @@ from pose_io.read_common import (
     LAYOUT_BY_JOINTS,
     parse_size,
 )
-from pose_io.read_json import SIDECAR_KIND, SIDECAR_NAME, load_json, read_openpose, read_results
+from pose_io.read_json import load_json, read_openpose, read_results
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
@@ -79,7 +79,7 @@ _SIZE_STEP = 16
 TRACK_SUFFIXES = (".npz", ".npy", ".csv", ".json")
 
 __all__ = [
-    "LAYOUT_BY_JOINTS", "READERS", "SIDECAR_KIND", "SIDECAR_NAME", "TrackSummary", "detect_format",
+    "LAYOUT_BY_JOINTS", "READERS", "TrackSummary", "detect_format",
     "drop_outliers", "infer_image_size", "parse_size", "read_detections", "read_track", "read_track_summary",
     "summarize_detections", "track_from_detections",
 ]

@@ -32,7 +32,7 @@ import numpy as np
 
 from pose_io.atomic import atomic_dir, atomic_file
 from pose_io.errors import InputError
-from pose_io.readers import SIDECAR_KIND, SIDECAR_NAME
+from pose_io.read_json import SIDECAR_KIND, SIDECAR_NAME
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)

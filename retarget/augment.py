@@ -169,7 +169,7 @@ def corrupt_inputs(
     """Noise and dropped joints for network inputs: [N, T, J, 2] -> [N, T, J, 2].
 
     A dropped joint takes its value from the last frame where it was kept (frame 0 is always kept), as
-    :func:`retarget.preprocess.hold_fill` fills real gaps.
+    :func:`pose_io.clean.hold_fill` fills real gaps.
     """
     n, t, j, _ = joints.shape
     noisy = joints + noise_std * torch.randn(joints.shape, generator=generator).to(joints.device)

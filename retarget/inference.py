@@ -1,6 +1,6 @@
 """What retargeting does whatever runs the network: settings, reference codes, and the algorithm around the network.
 
-:class:`RetargeterBase` prepares tracks (:mod:`retarget.preprocess`), cuts them into windows and stacks the
+:class:`RetargeterBase` prepares tracks (:mod:`retarget.tracks`), cuts them into windows and stacks the
 windows of many tracks (:mod:`retarget.windows`), and integrates, smooths and places the result; a backend
 (:mod:`retarget.api`: torch or numpy) only runs the network on numpy arrays.
 

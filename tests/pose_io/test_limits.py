@@ -13,7 +13,8 @@ import pytest
 from pose_io import BODY25, InputError, PoseTrack, read_track, read_track_summary, write_track
 from pose_io.clean import drop_outlier_joints, smooth
 from pose_io.limits import MAX_IMAGE_SIDE, outlier_mask
-from pose_io.readers import SIDECAR_NAME, parse_size
+from pose_io.read_json import SIDECAR_NAME
+from pose_io.readers import parse_size
 from pose_io.resample import resample
 
 R_WRIST = BODY25.index("r_wrist")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pose_io import InputError, PoseTrack, read_track, write_track
-from pose_io.readers import SIDECAR_NAME
+from pose_io.read_json import SIDECAR_NAME
 
 
 def ragged_track(layout: str = "body25", n_joints: int = 25) -> PoseTrack:
