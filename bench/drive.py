@@ -58,7 +58,8 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     import torch
 
     from bench.harness import peak_rss_mb, time_call
-    from clone.drive import build_drive_generator, drive
+    from clone.drive import drive
+    from clone.generate import build_drive_generator
     from clone.networks import generator_input
     from clone.reference_model import load_reference_model
 
@@ -96,7 +97,8 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
 def int8_ssim(model: Any, driver_path: str, method: str, frames: int = 60) -> float:
     """Mean SSIM of the int8 generator's frames against the fp32 ONNX session's over the first driven frames
     (each runtime on its own previous frames, as when driving)."""
-    from clone.drive import drive_poses, generate_frames, read_driver
+    from clone.drive import drive_poses, read_driver
+    from clone.generate import generate_frames
     from clone.metrics.frames import frame_pair_scores
 
     driven, _ = drive_poses(read_driver(driver_path), model, method)

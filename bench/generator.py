@@ -3,7 +3,7 @@
 Every (size, threads, option) runs in its own fresh subprocess (``python -m bench.generator``), so its
 peak RSS (``VmHWM``) is that configuration's alone; ``rss_delta_mb`` is the peak minus the RSS after
 importing torch and building the model and input, i.e. what running the option costs. Batch 1, frame by
-frame, as ``clone.drive.generate_frames`` runs a temporal generator.
+frame, as ``clone.generate.generate_frames`` runs a temporal generator.
 
 Baseline: eager fp32 with autograd on (eval mode). Options: ``inference_mode`` (what clone/drive.py uses
 today), ``channels_last`` (+ inference mode), ``bf16_autocast`` (CPU autocast + inference mode),

@@ -3,7 +3,7 @@
 
 The fp32 export (:func:`clone.onnx_generator.export_onnx`) is statically quantised by ONNX Runtime (QDQ,
 per-channel, activations uint8, weights int8), its activation ranges calibrated on a fp32 rollout over the
-first frames of the model's own reference track, drawn and fed back as :func:`clone.drive.generate_frames`
+first frames of the model's own reference track, drawn and fed back as :func:`clone.generate.generate_frames`
 does. On the 256² demo model (1 thread) it ran 1.96x the fp32 session (80 against 41 frames/s) and lost
 0.0028-0.0030 SSIM against the ground truth of the three held-out pairs (README, "Cloning on a laptop").
 
@@ -96,7 +96,7 @@ def calibration_feeds(model: ReferenceModel, fp32: OnnxGenerator,
         ``(feeds, frames)``: per frame, ONNX Runtime's input dict (``x`` [1, C_in, S, S], ``plate``) and the fp32
         output [1, 3, S, S] in [-1, 1]; a temporal generator gets its own previous output, as when driving.
     """
-    from clone.drive import draw_pose_maps
+    from clone.generate import draw_pose_maps
 
     track = model.reference_track.frames(0, min(config.frames, model.reference_track.num_frames))
     maps = np.concatenate(list(draw_pose_maps(model, track)))  # [N, S, S, 3] uint8

@@ -123,7 +123,7 @@ def _write_video(
         device: where the generator runs.
         progress: called with (frames done, total) after every frame.
     """
-    from clone.drive import generate_frames
+    from clone.generate import generate_frames
     from pose_io.video import VideoWriter
 
     height = _panel_height(model.canvas.size)

@@ -8,7 +8,7 @@ import torch
 
 from clone.background import PlateConfig, estimate_plate, person_mask, sample_frames
 from clone.canvas import Canvas
-from clone.drive import generate_frames
+from clone.generate import generate_frames
 from clone.networks import GeneratorConfig, build_generator
 from clone.reference_model import ReferenceModel
 from pose_io import BODY15, InputError, PoseTrack

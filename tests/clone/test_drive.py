@@ -13,7 +13,8 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.drive import drive, drive_poses, generate_frames, move_onto_reference
+from clone.drive import drive, drive_poses, move_onto_reference
+from clone.generate import generate_frames
 from clone.onnx_generator import onnx_available
 from clone.reference_model import file_sha256, load_reference_model
 from clone.stage import reference_stage
@@ -223,7 +224,9 @@ def test_a_failing_stage_ends_drive_with_its_error_and_leaves_nothing(trained, d
         return wrapped
 
     if stage == "draw":
-        monkeypatch.setattr(drive_module, "render_pose_map", fail_after(drive_module.render_pose_map))
+        import clone.generate as generate_module
+
+        monkeypatch.setattr(generate_module, "render_pose_map", fail_after(generate_module.render_pose_map))
     else:
         monkeypatch.setattr(VideoWriter, "write", fail_after(VideoWriter.write))
     threads = set(threading.enumerate())

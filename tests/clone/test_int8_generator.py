@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 from clone import int8_generator
 from clone.canvas import full_frame_canvas
 from clone.cli.main import app
-from clone.drive import build_drive_generator, draw_pose_maps
+from clone.generate import build_drive_generator, draw_pose_maps
 from clone.int8_generator import QuantConfig, build_int8_generator, cache_key, read_cached
 from clone.networks import build_generator, generator_input
 from clone.onnx_generator import OnnxGenerator, generator_runtime
