@@ -43,7 +43,7 @@ def eval_cloning(
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
-    """Pose error of retargeting weights on `clone demo`'s three pairs built from every clip of a split.
+    """Pose error and placement of retargeting weights on `clone demo`'s three pairs built from every clip of a split.
 
     Each usable clip of the split gives the demo's drivers (the child at +30°, the reference's own body at -30°,
     the child at -30°) and their ground truth (the demo's reference character at +30°); every driver is moved onto
@@ -94,7 +94,8 @@ def eval_cloning(
         "pairs": "; ".join(f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs),
         "reference": f"{config.reference_character} performing the built-in {config.reference_motion!r} motion at "
                      f"{config.reference_yaw:+g}°, {len(reference)} frames",
-        "case_list": [{"clip": c.clip, "kind": c.kind, **{n: float(e[k]) for n, e in errors.items()}}
+        "case_list": [{"clip": c.clip, "kind": c.kind,
+                       **{key: {n: float(e[k]) for n, e in rows.items()} for key, rows in errors.items()}}
                       for k, c in enumerate(cases)],
     })  # fmt: skip
     table = validation.markdown(doc)

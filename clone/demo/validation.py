@@ -6,8 +6,9 @@ becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at 
 the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. Every driver is moved
 onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
 with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track kept
-on the reference's stage (:func:`clone.drive.finish_driven`). The score is the demo's primary measure, the RMSE of
-the MidHip-aligned joints in % of the ground truth's height (:func:`clone.metrics.track_gt_scores`). Everybody
+on the reference's stage (:func:`clone.drive.finish_driven`). The scores are the demo's primary measure, the RMSE of
+the MidHip-aligned joints in % of the ground truth's height, and its placement, the MidHip's RMS distance from the
+truth's (:func:`clone.metrics.track_gt_scores`). Everybody
 Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.global_scale_to`, then the
 stage).
 
@@ -128,27 +129,36 @@ def global_scale_drive(reference: PoseTrack) -> Drive:
     return drive
 
 
-def case_error(driven: PoseTrack, truth: PoseTrack) -> float:
-    """The demo's pose error: RMSE of the MidHip-aligned joints in % of the truth's height."""
+# The demo's two pose measures (clone.metrics): summary key -> what cloning.md calls it.
+MEASURES: dict[str, str] = {
+    "pose_rmse_pct": "pose error (RMSE of the MidHip-aligned joints, % of the ground truth's height)",
+    "root_rmse_pct": "placement (RMS distance of the MidHip from the truth's, % of its height)",
+}
+
+
+def case_errors(driven: PoseTrack, truth: PoseTrack) -> dict[str, float]:
+    """The demo's pose error and placement of one case (:data:`MEASURES`)."""
     from clone.metrics import track_gt_scores
 
-    return float(track_gt_scores(driven.to_layout(truth.layout), truth).summary["pose_rmse_pct"])
+    summary = track_gt_scores(driven.to_layout(truth.layout), truth).summary
+    return {key: float(summary[key]) for key in MEASURES}
 
 
 def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
-          progress: Callable[[int, int], None] | None = None) -> dict[str, np.ndarray]:  # fmt: skip
-    """Row -> [N] pose errors (% of height) of every case, in the order of ``cases``."""
-    errors = {name: np.empty(len(cases)) for name in methods}
+          progress: Callable[[int, int], None] | None = None) -> dict[str, dict[str, np.ndarray]]:  # fmt: skip
+    """Measure -> row -> [N] errors (% of height) of every case, in the order of ``cases``."""
+    errors = {key: {name: np.empty(len(cases)) for name in methods} for key in MEASURES}
     for k, case in enumerate(cases):
         for name, drive in methods.items():
-            errors[name][k] = case_error(drive(case.driver), case.truth)
+            for key, value in case_errors(drive(case.driver), case.truth).items():
+                errors[key][name][k] = value
         if progress is not None:
             progress(k + 1, len(cases))
     return errors
 
 
-def summarise(cases: Sequence[CloningCase], errors: Mapping[str, np.ndarray], baseline: str) -> dict:
-    """Per row and pair kind the mean error ± its standard error, and the paired difference to ``baseline``."""
+def summarise(cases: Sequence[CloningCase], errors: Mapping[str, Mapping[str, np.ndarray]], baseline: str) -> dict:
+    """Per measure, row and pair kind the mean ± its standard error, and the paired difference to ``baseline``."""
     kinds = list(dict.fromkeys(c.kind for c in cases))
     masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds}, "all": np.ones(len(cases), bool)}
 
@@ -156,32 +166,35 @@ def summarise(cases: Sequence[CloningCase], errors: Mapping[str, np.ndarray], ba
         mean, se = mean_se(values)
         return {"mean": mean, "se": se}
 
-    rows = {}
-    for name, e in errors.items():
-        rows[name] = {k: stats(e[m]) for k, m in masks.items()}
-        rows[name]["vs_" + baseline] = {k: stats(e[m] - errors[baseline][m]) for k, m in masks.items()}
-    return {"cases": len(cases), "clips": len({c.clip for c in cases}), "kinds": kinds, "rows": rows}
+    measures = {}
+    for key, rows in errors.items():
+        measures[key] = {}
+        for name, e in rows.items():
+            measures[key][name] = {k: stats(e[m]) for k, m in masks.items()}
+            measures[key][name]["vs_" + baseline] = {k: stats(e[m] - rows[baseline][m]) for k, m in masks.items()}
+    return {"cases": len(cases), "clips": len({c.clip for c in cases}), "kinds": kinds, "measures": measures}
 
 
 def markdown(doc: Mapping) -> str:
-    """cloning.md: one table (rows by method, pair kinds across), then the paired differences."""
+    """cloning.md: per measure a table (rows by method, pair kinds across) and the paired differences."""
     kinds = [*doc["kinds"], "all"]
     base = doc["baseline"]
+    head = ["| method | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]
     lines = ["# Cloning-kind evaluation", "",
              (f"{doc['cases']} cases from {doc['clips']} clips of the {doc['split']} split, {doc['frames']} frames "
-              "each; pose error (RMSE of the MidHip-aligned joints, % of the ground truth's height), mean ± "
-              "standard error."), "",
-             "| method | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]  # fmt: skip
-    for name, row in doc["rows"].items():
-        lines.append(f"| {name} | " + " | ".join(f"{row[k]['mean']:.2f} ± {row[k]['se']:.2f}" for k in kinds) + " |")
-    lines += ["", f"Paired difference to {base} (negative: lower error):", "",
-              "| method | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]  # fmt: skip
-    for name, row in doc["rows"].items():
-        if name != base:
-            diff = row["vs_" + base]
-            lines.append(f"| {name} | " + " | ".join(f"{diff[k]['mean']:+.3f} ± {diff[k]['se']:.3f}" for k in kinds)
+              "each; mean ± standard error over the cases.")]  # fmt: skip
+    for key, rows in doc["measures"].items():
+        lines += ["", f"## {MEASURES[key][0].upper()}{MEASURES[key][1:]}", "", *head]
+        for name, row in rows.items():
+            lines.append(f"| {name} | " + " | ".join(f"{row[k]['mean']:.2f} ± {row[k]['se']:.2f}" for k in kinds)
                          + " |")  # fmt: skip
-    lines += ["", "Notes:", "",
+        lines += ["", f"Paired difference to {base} (negative: lower error):", "", *head]
+        for name, row in rows.items():
+            if name != base:
+                diff = row["vs_" + base]
+                lines.append(f"| {name} | " + " | ".join(f"{diff[k]['mean']:+.3f} ± {diff[k]['se']:.3f}"
+                                                         for k in kinds) + " |")  # fmt: skip
+    lines += ["", "## Notes", "",
               f"- Drivers: {doc['pairs']}. Reference: {doc['reference']}.",
               ("- Every method runs as `clone drive` runs it (networks: motion codes refined, foot skating cleaned "
                "with the driver's contacts; then the stage fit onto the reference's part of the frame).")]  # fmt: skip
@@ -189,6 +202,6 @@ def markdown(doc: Mapping) -> str:
 
 
 __all__ = [
-    "CASE_START", "DEMO", "CloningCase", "case_error", "cloning_cases", "global_scale_drive", "markdown", "network_drive",
-    "score", "summarise",
+    "CASE_START", "DEMO", "MEASURES", "CloningCase", "case_errors", "cloning_cases", "global_scale_drive", "markdown",
+    "network_drive", "score", "summarise",
 ]

@@ -87,15 +87,27 @@ def test_scores_rank_the_shipped_network_over_global_scaling_and_an_untrained_on
     }
     errors = validation.score(cases, methods)
     doc = validation.summarise(cases, errors, "ours")
-    rows = doc["rows"]
+    assert list(doc["measures"]) == list(validation.MEASURES) == ["pose_rmse_pct", "root_rmse_pct"]
     assert doc["cases"] == len(cases) and doc["kinds"] == [p.name for p in PAIRS]
-    assert rows["same"]["vs_ours"]["all"] == {"mean": 0.0, "se": 0.0}  # the same weights, the same errors
-    assert rows["ours"]["all"]["mean"] == pytest.approx(errors["ours"].mean())
-    diff = rows["untrained"]["vs_ours"]["all"]
-    assert diff["mean"] == pytest.approx((errors["untrained"] - errors["ours"]).mean())
-    assert rows["ours"]["all"]["mean"] < rows["untrained"]["all"]["mean"]
+    for key, rows in doc["measures"].items():
+        assert rows["same"]["vs_ours"]["all"] == {"mean": 0.0, "se": 0.0}  # the same weights, the same errors
+        assert rows["ours"]["all"]["mean"] == pytest.approx(errors[key]["ours"].mean())
+        diff = rows["untrained"]["vs_ours"]["all"]
+        assert diff["mean"] == pytest.approx((errors[key]["untrained"] - errors[key]["ours"]).mean())
+    pose = doc["measures"]["pose_rmse_pct"]
+    assert pose["ours"]["all"]["mean"] < pose["untrained"]["all"]["mean"]
     for kind in ("proportions", "both"):  # the paper's claim on the demo's pairs
-        assert rows["ours"][kind]["mean"] < rows["global scaling (EDN)"][kind]["mean"]
+        assert pose["ours"][kind]["mean"] < pose["global scaling (EDN)"][kind]["mean"]
+    # The errors are the demo's: clone.metrics.evaluate_track of the same driven track.
+    from clone.metrics import evaluate_track
+    from pose_io.measures import reference_limb_lengths, skeleton_height
+
+    driven = methods["ours"](cases[0].driver)
+    ref15 = reference.to_layout("body15")
+    full = evaluate_track(driven, reference_limb_lengths(ref15.joints), skeleton_height(ref15.joints, "body15"),
+                          cases[0].truth).summary  # fmt: skip
+    assert errors["pose_rmse_pct"]["ours"][0] == pytest.approx(full["pose_rmse_pct"])
+    assert errors["root_rmse_pct"]["ours"][0] == pytest.approx(full["root_rmse_pct"])
 
 
 def test_command_writes_the_tables_and_refuses_bad_input(tiny_mocap, cache, tmp_path) -> None:
@@ -107,11 +119,11 @@ def test_command_writes_the_tables_and_refuses_bad_input(tiny_mocap, cache, tmp_
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
     doc = json.loads((out / "cloning.json").read_text())
-    assert list(doc["rows"]) == ["ours", "again", "global scaling (EDN)"]
+    assert list(doc["measures"]["pose_rmse_pct"]) == ["ours", "again", "global scaling (EDN)"]
     assert doc["cases"] == len(PAIRS) and len(doc["case_list"]) == len(PAIRS)
-    assert doc["rows"]["again"]["vs_ours"]["all"]["mean"] == 0.0
+    assert doc["measures"]["root_rmse_pct"]["again"]["vs_ours"]["all"]["mean"] == 0.0
     table = (out / "cloning.md").read_text()
-    assert "| ours |" in table and "Paired difference to ours" in table
+    assert "## Pose error" in table and "## Placement" in table and table.count("Paired difference to ours") == 2
     again = runner.invoke(app, args)  # --out exists
     assert again.exit_code == 2 and again.output.count("error:") == 1
     clash = runner.invoke(app, [*args[:-6], "--compare", f"ours={PACKAGED_WEIGHTS}", "--overwrite"])
