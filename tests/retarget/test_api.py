@@ -118,6 +118,37 @@ def test_view_code_comes_from_the_view_track(retargeter, clips):
     np.testing.assert_array_equal(other.view, retargeter.reference_codes(clips["tall_man"]).view)
 
 
+@pytest.mark.parametrize("windows", [1, 2, 3, 7])
+def test_the_view_code_is_the_window_code_nearest_their_mean_and_the_skeleton_code_their_mean(retargeter, windows):
+    """A person who turns is seen from several views: the mean of their view codes is no view's code."""
+    rng = np.random.default_rng(windows)
+    per_window = {"body": rng.normal(size=(windows, 16)), "view": rng.normal(size=(windows, 8))}
+    seen = []
+
+    def encode(batch, which):  # window k starts at frame 32 k and holds k in every value
+        seen.append(len(batch))
+        return per_window[which][batch[:, 0, 0].astype(int)].astype(np.float32)
+
+    config = retargeter.config
+    length = config.code_window + (windows - 1) * config.code_stride
+    x = np.repeat(np.arange(length) // config.code_stride, 1)[None].repeat(30, axis=0).astype(np.float32)
+    x = np.minimum(x, windows - 1)  # window k's first frame is k
+    nearest = dataclasses.replace(retargeter, config=dataclasses.replace(config, view_pool="nearest"))
+    mean = dataclasses.replace(retargeter, config=dataclasses.replace(config, view_pool="mean"))
+    for net in (nearest, mean):
+        object.__setattr__(net, "_encode_static", encode)
+    codes = per_window["view"]
+    expected_view = codes.mean(axis=0)
+    if windows >= 3:  # with two windows both are equally near their mean: the mean it is
+        expected_view = codes[np.argmin(((codes - codes.mean(axis=0)) ** 2).sum(axis=1))]
+    np.testing.assert_allclose(nearest._static_code(x, "view"), expected_view, rtol=1e-6)
+    np.testing.assert_allclose(mean._static_code(x, "view"), codes.mean(axis=0), rtol=1e-6)
+    for net in (nearest, mean):
+        np.testing.assert_allclose(net._static_code(x, "body"), per_window["body"].mean(axis=0), rtol=1e-6)
+    with pytest.raises(ValueError, match="view_pool"):
+        InferenceConfig(view_pool="median")
+
+
 def test_bad_inputs(retargeter, clips, weights_dir):
     small = clips["small_man"]
     reference = retargeter.reference_codes(small)
