@@ -11,8 +11,8 @@ with them, B first resampled to A's frame rate when they differ (``video`` canva
 
 Two canvases, i.e. two conventions for codes and output:
 
-* ``video`` (default), as `clone retarget apply` does it: skeleton and view codes are the mean over windows
-  (:meth:`Retargeter.reference_codes`), the poses are in A's pixels, smoothed over time like retargeted tracks
+* ``video`` (default), as `clone retarget apply` does it: skeleton and view codes are a reference's
+  (:meth:`Retargeter.reference_codes`: the mean over windows, the view code the window code nearest it), the poses are in A's pixels, smoothed over time like retargeted tracks
   and standing where A stands; like retargeting, the network runs at its own frame rate (A and B are resampled
   to it when A's is another) and the poses come back at A's frames. A cell whose codes all come from whole clips
   is plain retargeting with those

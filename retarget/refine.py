@@ -7,8 +7,9 @@ shipped network). A few Adam steps on the code alone, the network frozen, bring 
 codes. The root velocity comes from the encoder's code: refined, it follows the driver's body and view too
 closely and the root path onto another body gets worse (measured on the validation split).
 
-The driver's own skeleton and view codes are made as a reference's are (:meth:`RetargeterBase.reference_codes`):
-the mean over windows of the training length, not one pool over a long window. A pull towards the encoder's
+The driver's own skeleton and view codes are the mean over windows of the training length, as a reference's
+skeleton code is (:meth:`RetargeterBase.reference_codes`), not one pool over a long window; its view code too is
+the mean here (the reference's view pooling was chosen after this refinement, with it as it is). A pull towards the encoder's
 code (``anchor``) keeps the refined code where the decoder was trained. The settings are
 :class:`retarget.inference.InferenceConfig`'s ``refine_*``.
 """
