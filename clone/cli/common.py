@@ -8,7 +8,8 @@ import math
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any, TypeVar
+from pathlib import Path
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
@@ -93,6 +94,30 @@ def setup_logging(verbose: bool) -> None:
 # --device is free text (cuda:N), not a choice: resolve_device_option checks it.
 DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 MAX_THREADS = 1024  # --threads of every command
+
+# Options several commands that read the motion world or compare checkpoints share.
+CompareOption = Annotated[
+    list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
+]
+WorldSeedOption = Annotated[
+    int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
+]
+WorldCacheOption = Annotated[
+    Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
+]
+
+
+def named_checkpoints(items: list[str] | None, taken: tuple[str, ...] = ()) -> dict[str, Path]:
+    """``--compare NAME=PATH`` values by name; InputError for a malformed one or a name in ``taken`` or repeated."""
+    named: dict[str, Path] = {}
+    for item in items or []:
+        name, sep, path = item.partition("=")
+        if not sep or not name.strip() or not path:
+            raise InputError(f"--compare {item!r}: expected NAME=PATH")
+        if name.strip() in (*taken, *named):
+            raise InputError(f"--compare {name.strip()}: that row name is taken; choose another")
+        named[name.strip()] = Path(path)
+    return named
 
 
 def training_device(spec: str, threads: int | None = None):  # -> torch.device

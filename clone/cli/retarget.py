@@ -15,7 +15,16 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import OutputFormat, Split
-from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, user_errors
+from clone.cli.common import (
+    DEVICE_HELP,
+    MAX_THREADS,
+    CompareOption,
+    WorldCacheOption,
+    WorldSeedOption,
+    console,
+    named_checkpoints,
+    user_errors,
+)
 from clone.cli.retarget_cloning import eval_cloning
 from clone.cli.retarget_train import train
 from retarget.inference import REFINE_STEPS  # numpy and pose_io only, which the command line loads anyway
@@ -192,9 +201,7 @@ def evaluate(
     weights: Annotated[
         Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights, if any).")
     ] = None,
-    compare: Annotated[
-        list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
-    ] = None,
+    compare: CompareOption = None,
     official: Annotated[
         Path | None,
         typer.Option("--official", help="Folder of the authors' pretrained_{full,skeleton,view}.pth and .npy."),
@@ -230,12 +237,8 @@ def evaluate(
         typer.Option("--refine-steps", help="Motion-code refinement steps of ours and the --compare rows (default: "
                      f"inference's, {REFINE_STEPS}; 0: the network alone). The authors' rows always run as released."),
     ] = None,
-    world_seed: Annotated[
-        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
-    ] = 0,
-    cache: Annotated[
-        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
-    ] = None,
+    world_seed: WorldSeedOption = 0,
+    cache: WorldCacheOption = None,
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
@@ -260,12 +263,7 @@ def evaluate(
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
-    named: dict[str, Path] = {}
-    for item in compare or []:
-        name, sep, path = item.partition("=")
-        if not sep or not name.strip() or not path:
-            raise InputError(f"--compare {item!r}: expected NAME=PATH")
-        named[name.strip()] = Path(path)
+    named = named_checkpoints(compare)
     real_tracks = None
     if real is not None:
         from retarget.train import read_real_tracks

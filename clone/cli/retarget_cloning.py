@@ -12,7 +12,16 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Split
-from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, user_errors
+from clone.cli.common import (
+    DEVICE_HELP,
+    MAX_THREADS,
+    CompareOption,
+    WorldCacheOption,
+    WorldSeedOption,
+    console,
+    named_checkpoints,
+    user_errors,
+)
 
 MAX_CLIPS = 100_000
 MAX_FRAMES = 100_000
@@ -25,20 +34,14 @@ def eval_cloning(
     weights: Annotated[
         Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights).")
     ] = None,
-    compare: Annotated[
-        list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
-    ] = None,
+    compare: CompareOption = None,
     split: Annotated[
         Split, typer.Option("--split", parser=Split, help="World split whose clips drive (tune on val).")
     ] = Split.VAL,
     clips: Annotated[int | None, typer.Option("--clips", help="Use at most this many clips (default: all).")] = None,
     frames: Annotated[int, typer.Option("--frames", help="Frames per case (the demo's: 100).")] = 100,
-    world_seed: Annotated[
-        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
-    ] = 0,
-    cache: Annotated[
-        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
-    ] = None,
+    world_seed: WorldSeedOption = 0,
+    cache: WorldCacheOption = None,
     threads: Annotated[int | None, typer.Option("--threads", help="CPU threads (default: the free cores).")] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
@@ -67,13 +70,7 @@ def eval_cloning(
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     networks: dict[str, Path | None] = {"ours": weights}
-    for item in compare or []:
-        name, sep, path = item.partition("=")
-        if not sep or not name.strip() or not path:
-            raise InputError(f"--compare {item!r}: expected NAME=PATH")
-        if name.strip() in (*networks, "global scaling (EDN)"):
-            raise InputError(f"--compare {name.strip()}: that row name is taken; choose another")
-        networks[name.strip()] = Path(path)
+    networks.update(named_checkpoints(compare, taken=("ours", "global scaling (EDN)")))
     configure_threads(threads)
     config = validation.DEMO
     reference = reference_track(config)

@@ -11,7 +11,7 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import Ablation, Variant
-from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, training_device, user_errors
+from clone.cli.common import DEVICE_HELP, MAX_THREADS, WorldCacheOption, console, training_device, user_errors
 
 # Ranges of options that scale time or memory, checked before any work.
 MAX_MINUTES = 7 * 24 * 60.0
@@ -56,9 +56,7 @@ def train(
         typer.Option("--ablation", parser=Ablation, help="Objective: the paper's, without triplet loss, or without "
                      "cross reconstruction."),
     ] = Ablation.FULL,
-    cache: Annotated[
-        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
-    ] = None,
+    cache: WorldCacheOption = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
     threads: Annotated[
         int | None, typer.Option("--threads", min=1, help="CPU threads (default: the free cores).")

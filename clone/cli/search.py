@@ -11,7 +11,14 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import DEVICE_HELP, console, resolve_device_option, user_errors
+from clone.cli.common import (
+    DEVICE_HELP,
+    WorldCacheOption,
+    WorldSeedOption,
+    console,
+    resolve_device_option,
+    user_errors,
+)
 
 search_app = typer.Typer(
     help="Motion retrieval: index pose tracks by their motion codes, then find a query's motion in them.",
@@ -129,12 +136,8 @@ def evaluate(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the index performances and the queries.")] = 0,
     weights: Annotated[Path | None, typer.Option("--weights", help=_WEIGHTS_HELP)] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Also write the results as JSON here.")] = None,
-    world_seed: Annotated[
-        int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
-    ] = 0,
-    cache: Annotated[
-        Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
-    ] = None,
+    world_seed: WorldSeedOption = 0,
+    cache: WorldCacheOption = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help=_THREADS_HELP)] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
