@@ -192,6 +192,8 @@ options("retarget eval-cloning", EVALC, [b.mocap_empty], {
 })
 paths("retarget eval-cloning", EVALC[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out", ["{t}/olddir", "{t}/old.npz",
                                                                                    "{t}/blocker/e"])
+add("retarget eval --compare twice", [*EVAL, "--compare", "a=x.pt", "--compare", "a=y.pt"], [b.mocap_empty])
+add("retarget eval-cloning --compare twice", [*EVALC, "--compare", "a=x.pt", "--compare", "a=y.pt"], [b.mocap_empty])
 add("retarget eval-cloning missing mocap", ["retarget", "eval-cloning", "--mocap", "{t}/nomocap", "--out", "{t}/e"])
 
 INTERP = ["retarget", "interpolate", "{t}/poses.npz", "{t}/poses.npz", "--out", "{t}/grid.npz", "--device", "cpu"]
