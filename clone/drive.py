@@ -63,12 +63,18 @@ class DriveResult:
 
 def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
     """The driver's track as body15, gaps of at most ``max_gap`` frames filled linearly."""
-    from pose_io.clean import fill_gaps
     from pose_io.readers import read_track
 
-    track = read_track(path).to_layout(LAYOUT)
+    return driver_track(read_track(path), max_gap, str(path))
+
+
+def driver_track(track: PoseTrack, max_gap: int = 5, name: str = "driver") -> PoseTrack:
+    """A driver's track as `clone drive` uses it: body15, gaps of at most ``max_gap`` frames filled linearly."""
+    from pose_io.clean import fill_gaps
+
+    track = track.to_layout(LAYOUT)
     if not (~track.missing).any():
-        raise InputError(f"{path}: no visible joints in any frame")
+        raise InputError(f"{name}: no visible joints in any frame")
     if max_gap > 0:
         track, _ = fill_gaps(track, max_gap)
     return track

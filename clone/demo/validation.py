@@ -47,7 +47,7 @@ class CloningCase:
     Attributes:
         clip: the clip's path in the mocap folder (as the split lists it).
         kind: the demo pair it copies (``proportions``, ``view``, ``both``).
-        driver: the driver's body15 track (gaps of up to 5 frames filled).
+        driver: the driver's track as `clone drive` reads it (:func:`clone.drive.driver_track`).
         truth: the reference character performing the same frames, seen by the reference's camera (body15).
     """
 
@@ -75,9 +75,9 @@ def cloning_cases(
         InputError: no clip long enough whose ground truth stays inside the frame.
     """
     from clone.demo.scenes import stays_in_frame
+    from clone.drive import driver_track
     from clone.synth import get_character
     from clone.synth.performance import render_performance
-    from pose_io.clean import fill_gaps
     from retarget.world import load_motion
 
     ref_skeleton, ref_look, _ = get_character(config.reference_character)
@@ -97,7 +97,7 @@ def cloning_cases(
         for pair in config.pairs:
             skeleton, look, _ = get_character(pair.character)
             driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
-            cases.append(CloningCase(clip["path"], pair.name, fill_gaps(driver.to_layout("body15"), 5)[0],
+            cases.append(CloningCase(clip["path"], pair.name, driver_track(driver, name=clip["path"]),
                                      truth.to_layout("body15")))  # fmt: skip
     if not cases:
         raise InputError(f"no clip of at least {CASE_START + frames} frames whose ground truth stays inside the frame")
