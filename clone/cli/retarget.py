@@ -36,6 +36,7 @@ retarget_app = typer.Typer(
 
 # Ranges of options that scale time or memory, checked before any work.
 MAX_PAIRS = 1_000_000
+MAX_CODE_GRIDS = 1_000  # 216 windows each
 MAX_LENGTH = 100_000
 MAX_REFINE_STEPS = 1000
 
@@ -232,6 +233,10 @@ def evaluate(
                             "person's height (real OpenPose tracks: about 0.002-0.006).")
     ] = 0.0,
     split: Annotated[Split, typer.Option("--split", parser=Split, help="World split to measure on.")] = Split.TEST,
+    code_grids: Annotated[
+        int, typer.Option("--code-grids", min=1, help="Silhouette grids (6 motions x 6 characters x 6 views each, "
+                          "drawn anew) averaged; 1: the paper's single grid.")
+    ] = 10,
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Motion-code refinement steps of ours and the --compare rows (default: "
@@ -259,6 +264,7 @@ def evaluate(
     check_number("--max-yaw", max_yaw, 0, 90)
     check_number("--max-pitch", max_pitch, 0, 60)
     check_number("--noise", noise, 0, 0.1)
+    check_number("--code-grids", code_grids, 1, MAX_CODE_GRIDS)
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     if not mocap.is_dir():
@@ -277,7 +283,7 @@ def evaluate(
         doc, table = run_eval(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, reference_length=reference_length, seed=seed, max_yaw=max_yaw,
-                              max_pitch=max_pitch, noise=noise),
+                              max_pitch=max_pitch, noise=noise, code_grids=code_grids),
             fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed, refine_steps=refine_steps,
             progress=lambda done, total: bar.update(task, completed=done, total=total),

@@ -56,13 +56,14 @@ def pca_2d(features: np.ndarray) -> np.ndarray:
     return (vectors.flip(1)[:, :2] * top.sqrt()).numpy()
 
 
-def _code_grid(split: WorldSplit, config: EvalConfig) -> np.ndarray:
-    """[N, 3] (window, character, view) rows: ``code_samples`` distinct motion groups x characters x views.
+def _code_grid(split: WorldSplit, config: EvalConfig, grid: int = 0) -> np.ndarray:
+    """[N, 3] (window, character, view) rows of silhouette grid ``grid``: ``code_samples`` distinct motion groups
+    x characters x views.
 
     Raises:
         InputError: fewer than two windows, characters or views to cross.
     """
-    rng = np.random.default_rng([config.seed, 1])
+    rng = np.random.default_rng([config.seed, 1] if grid == 0 else [config.seed, 1, grid])
     by_group: dict[str, list[int]] = {}
     for m, lab in enumerate(split.window_labels):
         if lab.clip_frames - lab.start >= split.window_length:
@@ -82,25 +83,8 @@ def _code_grid(split: WorldSplit, config: EvalConfig) -> np.ndarray:
     return np.array([(m, c, v) for m in motions for c in chars for v in views])
 
 
-def code_silhouettes(
-    net: object, split: WorldSplit, config: EvalConfig = DEFAULT_CONFIG, fps: float = 30.0
-) -> tuple[dict[str, float], dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """Mean silhouette coefficients of a network's codes on a grid of the split's windows.
-
-    The grid crosses ``code_samples`` windows of distinct motion groups, characters and views (pitch 0); motion
-    codes are labelled by motion, skeleton codes by character, view codes by view.
-
-    Args:
-        net: a ``Retargeter``.
-        split: the windows.
-        config: ``code_samples`` and ``seed``.
-        fps: frame rate of the world.
-
-    Returns:
-        ``(scores, codes, labels)``: name -> silhouette, name -> [N, D] codes, name -> [N] labels, for the
-        names among "motion", "body", "view" the network has.
-    """
-    grid = _code_grid(split, config)  # [N, 3]
+def _grid_codes(net: object, split: WorldSplit, grid: np.ndarray, fps: float) -> dict[str, np.ndarray]:
+    """Name -> [N, D] codes of a grid's windows, for the names among "motion", "body", "view" the network has."""
     windows = split.windows(grid[:, 0], grid[:, 1], grid[:, 2])  # [N, L, 15, 2]
     size = tuple(split.canvas_size)
     canvas = np.stack([prepare_track(body15_track(w, fps, size), net.preprocess) for w in windows])  # [N, L, 15, 2]
@@ -112,12 +96,42 @@ def code_silhouettes(
     if model.view_encoder is not None:
         encoders["view"] = model.encode_view
     with torch.inference_mode():
-        codes = {name: torch.cat([enc(chunk).flatten(1) for chunk in x.split(64)]).double().cpu().numpy()
-                 for name, enc in encoders.items()}  # fmt: skip
-    all_labels = {"motion": grid[:, 0], "body": grid[:, 1], "view": grid[:, 2]}
-    labels = {name: all_labels[name] for name in codes}
-    scores = {name: silhouette(c, labels[name]) for name, c in codes.items()}
-    return scores, codes, labels
+        return {name: torch.cat([enc(chunk).flatten(1) for chunk in x.split(64)]).double().cpu().numpy()
+                for name, enc in encoders.items()}  # fmt: skip
+
+
+def code_silhouettes(
+    net: object, split: WorldSplit, config: EvalConfig = DEFAULT_CONFIG, fps: float = 30.0
+) -> tuple[dict[str, float], dict[str, float], dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Mean silhouette coefficients of a network's codes over ``code_grids`` grids of the split's windows.
+
+    Each grid crosses ``code_samples`` windows of distinct motion groups, characters and views (pitch 0); motion
+    codes are labelled by motion, skeleton codes by character, view codes by view.
+
+    Args:
+        net: a ``Retargeter``.
+        split: the windows.
+        config: ``code_samples``, ``code_grids`` and ``seed``.
+        fps: frame rate of the world.
+
+    Returns:
+        ``(scores, errors, codes, labels)``: name -> mean silhouette over the grids, name -> its standard error
+        (0 with one grid), name -> [N, D] codes of grid 0, name -> [N] their labels, for the names among
+        "motion", "body", "view" the network has.
+    """
+    per_grid: list[dict[str, float]] = []
+    for g in range(config.code_grids):
+        grid = _code_grid(split, config, g)  # [N, 3]
+        codes = _grid_codes(net, split, grid, fps)
+        all_labels = {"motion": grid[:, 0], "body": grid[:, 1], "view": grid[:, 2]}
+        labels = {name: all_labels[name] for name in codes}
+        per_grid.append({name: silhouette(c, labels[name]) for name, c in codes.items()})
+        if g == 0:
+            first = codes, labels
+    values = {name: np.array([s[name] for s in per_grid]) for name in per_grid[0]}
+    scores = {name: float(v.mean()) for name, v in values.items()}
+    errors = {name: float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else 0.0 for name, v in values.items()}
+    return scores, errors, *first
 
 
 def plot_codes(

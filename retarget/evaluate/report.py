@@ -34,8 +34,11 @@ def markdown_report(doc: Mapping) -> str:
         lines += ["## Mean silhouette coefficients of the codes", "",
                   "| network | motion codes (by motion) | skeleton codes (by character) | view codes (by view) |",
                   "|---|---|---|---|"]  # fmt: skip
+        errors = doc.get("silhouette_errors", {})
         for name, s in doc["silhouettes"].items():
-            cells = [f"{s[k]:.3f}" if k in s else "–" for k in ("motion", "body", "view")]
+            se = errors.get(name, {})
+            cells = [(f"{s[k]:.3f} ± {se[k]:.3f}" if k in se else f"{s[k]:.3f}") if k in s else "–"
+                     for k in ("motion", "body", "view")]  # fmt: skip
             lines.append(f"| {name} | " + " | ".join(cells) + " |")
         lines.append("")
     lines += ["## Notes", ""] + [f"- {n}" for n in doc["notes"]]
@@ -88,8 +91,10 @@ def report_notes(doc: Mapping) -> list[str]:
         notes.append(f"{name}: {what}.")
     notes += doc.get("remarks", [])
     if doc["silhouettes"]:
+        grids = cfg.get("code_grids", 1)
         notes.append(f"Silhouettes: codes of {cfg['code_samples']} windows of distinct motions × "
                      f"{cfg['code_samples']} characters × up to {cfg['code_samples']} views of the split (pitch 0); "
+                     f"mean ± standard error over {grids} such grids, each with its own motions and characters; "
                      "~1 = clusters by the label, ~0 = the label does not explain the codes. Plots: codes_*.png, "
-                     "first two principal components.")  # fmt: skip
+                     "the first grid's codes along their first two principal components.")  # fmt: skip
     return notes

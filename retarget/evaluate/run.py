@@ -17,7 +17,7 @@ from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.baselines import global_scale_retarget, limb_scale_retarget
 from retarget.evaluate.cases import ClipMotions, evaluate
-from retarget.evaluate.codes import code_silhouettes, plot_codes
+from retarget.evaluate.codes import code_silhouettes, plot_codes, silhouette
 from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progress
 from retarget.evaluate.real import real_pair_results
 from retarget.evaluate.references3d import REFERENCES_3D
@@ -168,7 +168,7 @@ def _plot_files(names: Sequence[str]) -> dict[str, str]:
 
 def _document(
     split: WorldSplit, config: EvalConfig, bvh: Sequence[str | Path], rows: _Rows, results: dict,
-    real_results: dict, silhouettes: dict[str, dict[str, float]],
+    real_results: dict, silhouettes: dict[str, dict[str, float]], silhouette_errors: dict[str, dict[str, float]],
 ) -> dict:  # fmt: skip
     """The document of eval.json, with its notes and the names of the code plots (not yet its ``seconds``)."""
     doc: dict = {
@@ -183,6 +183,7 @@ def _document(
         "results": results,
         "real_pairs": real_results,
         "silhouettes": silhouettes,
+        "silhouette_errors": silhouette_errors,
         "remarks": rows.remarks,
     }
     doc["notes"] = report_notes(doc)
@@ -196,7 +197,8 @@ def _write(
     """Write the code plots, eval.json and eval.md into ``out`` atomically; sets ``doc["seconds"]``."""
     with atomic_dir(out, overwrite=overwrite) as tmp:
         for name, (codes, labels) in plots.items():
-            plot_codes(tmp / doc["code_plots"][name], name, codes, labels, doc["silhouettes"][name])
+            own = {k: silhouette(c, labels[k]) for k, c in codes.items()}  # the plotted grid's own scores
+            plot_codes(tmp / doc["code_plots"][name], name, codes, labels, own)
         doc["seconds"] = round(time.perf_counter() - started, 1)
         table = markdown_report(doc)
         (tmp / "eval.json").write_text(json.dumps(doc, indent=2))
@@ -270,14 +272,15 @@ def run_eval(
     measured = {n: m for n, m in rows.methods.items() if n in rows.nets or n in BASELINES}
     real_results = real_pair_results(real, measured) if real else {}
     silhouettes: dict[str, dict[str, float]] = {}
+    silhouette_errors: dict[str, dict[str, float]] = {}
     plots: dict[str, tuple[dict[str, np.ndarray], dict[str, np.ndarray]]] = {}
     for name, net in rows.nets.items():
-        scores, codes, labels = code_silhouettes(net, split, config, fps)
-        silhouettes[name] = scores
+        scores, errors, codes, labels = code_silhouettes(net, split, config, fps)
+        silhouettes[name], silhouette_errors[name] = scores, errors
         plots[name] = (codes, labels)
         done += 1
         tick(0, total)
-    doc = _document(split, config, bvh, rows, results, real_results, silhouettes)
+    doc = _document(split, config, bvh, rows, results, real_results, silhouettes, silhouette_errors)
     table = _write(out, overwrite, doc, plots, started)
     log.info("evaluation written to %s in %.0f s", out, doc["seconds"])
     return doc, table

@@ -10,7 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from retarget.evaluate import pca_2d, silhouette
+from retarget.evaluate import EvalConfig, code_silhouettes, pca_2d, silhouette
+from retarget.evaluate.codes import _code_grid
+from retarget.evaluate.run import network_method
+from retarget.world import MotionWorld
 
 
 def test_silhouette_known_value_separated_and_random() -> None:
@@ -63,3 +66,19 @@ def test_plotting_codes_leaves_matplotlib_alone(tmp_path: Path) -> None:
     assert "pyplot imported: False" in run.stdout
     assert "backend: svg" in run.stdout
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_silhouettes_average_grids_that_keep_the_first(tiny_mocap: Path, cache: Path, tiny_weights: Path) -> None:
+    split = MotionWorld.build(tiny_mocap, cache).split("test")
+    net = network_method(tiny_weights, refine_steps=0)[1]
+    one = EvalConfig(pairs=1, code_grids=1)
+    first = _code_grid(split, one, 0)
+    again = _code_grid(split, one, 1)
+    assert np.array_equal(np.unique(first[:, 2]), np.unique(again[:, 2]))  # the same views
+    assert not np.array_equal(first, again)  # other windows and characters
+    scores, errors, codes, labels = code_silhouettes(net, split, one)
+    assert scores == {k: pytest.approx(silhouette(codes[k], labels[k])) for k in codes}  # grid 0 alone
+    assert errors == {k: 0.0 for k in codes}
+    mean, se, codes3, _ = code_silhouettes(net, split, EvalConfig(pairs=1, code_grids=3))
+    assert all(np.array_equal(codes3[k], codes[k]) for k in codes)  # the plotted grid is still grid 0
+    assert all(se[k] > 0 for k in codes) and mean != scores

@@ -20,6 +20,7 @@ def _document() -> dict:
         "results": {"val split": {"ours": scores, "3D naive copy": scores}},
         "real_pairs": {"a -> b": {"ours": real}},
         "silhouettes": {"ours": {"motion": 0.25, "view": -0.5}},
+        "silhouette_errors": {"ours": {"motion": 0.01, "view": 0.02}},
         "remarks": ["a remark"],
     }
     doc["notes"] = report_notes(doc)
@@ -32,7 +33,10 @@ def test_tables_silhouettes_and_notes() -> None:
     assert "## val split: 3 cases of 64 frames" in table
     assert "| ours | 0.50 ± 0.10 | 0.5 | 0.500 | 0.500 | 0.50 | 0.50 ± 0.10 | 0.500 | 0.50 | 0.500 |" in table
     assert "| a -> b | ours | 0.90 | 12.0 (20.0) | 3.0 |" in table
-    assert "| ours | 0.250 | – | -0.500 |" in table  # a network without a skeleton encoder
+    assert "| ours | 0.250 ± 0.010 | – | -0.500 ± 0.020 |" in table  # a network without a skeleton encoder
+    assert "mean ± standard error over 10 such grids" in table
+    del doc["silhouette_errors"]  # an eval.json written before the grids: one value each
+    assert "| ours | 0.250 | – | -0.500 |" in markdown_report(doc)
     assert "- ours: our network; weights w.pt." in table
     assert "- 3D naive copy: A unchanged." in table and "- a remark" in table
     assert table.endswith("\n")

@@ -36,6 +36,8 @@ def test_cli_writes_the_table_plots_and_json(
     assert set(doc["silhouettes"]["ours"]) == {"motion", "body", "view"}
     assert all(-1.0 <= v <= 1.0 for v in doc["silhouettes"]["no triplet"].values())
     assert set(doc["silhouettes"]["authors' view-only"]) == {"motion", "view"}
+    assert set(doc["silhouette_errors"]["authors' view-only"]) == {"motion", "view"}
+    assert all(v > 0 for v in doc["silhouette_errors"]["ours"].values())  # ten grids that differ
     assert sorted(p.name for p in out.glob("*.png")) == [
         "codes_authors_full.png", "codes_authors_skeleton_only.png", "codes_authors_view_only.png",
         "codes_no_triplet.png", "codes_ours.png",
