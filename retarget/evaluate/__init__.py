@@ -32,6 +32,7 @@ Rows: the networks (ours, ``--compare`` checkpoints, the authors' released model
 Modules: :mod:`~retarget.evaluate.config` (what is evaluated), :mod:`~retarget.evaluate.scores` (one case's
 scores and their summary), :mod:`~retarget.evaluate.references3d`, :mod:`~retarget.evaluate.cases` (sampling
 and the evaluation loop), :mod:`~retarget.evaluate.codes` (silhouettes and their plots),
+:mod:`~retarget.evaluate.probe` (a proportion probe, the reference point for the skeleton codes' silhouette),
 :mod:`~retarget.evaluate.real` (real-track pairs, no ground truth), :mod:`~retarget.evaluate.report` (eval.md)
 and :mod:`~retarget.evaluate.run` (the rows and the output folder).
 """

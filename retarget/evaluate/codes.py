@@ -56,7 +56,7 @@ def pca_2d(features: np.ndarray) -> np.ndarray:
     return (vectors.flip(1)[:, :2] * top.sqrt()).numpy()
 
 
-def _code_grid(split: WorldSplit, config: EvalConfig, grid: int = 0) -> np.ndarray:
+def code_grid(split: WorldSplit, config: EvalConfig, grid: int = 0) -> np.ndarray:
     """[N, 3] (window, character, view) rows of silhouette grid ``grid``: ``code_samples`` distinct motion groups
     x characters x views.
 
@@ -83,13 +83,19 @@ def _code_grid(split: WorldSplit, config: EvalConfig, grid: int = 0) -> np.ndarr
     return np.array([(m, c, v) for m in motions for c in chars for v in views])
 
 
-def _grid_codes(net: object, split: WorldSplit, grid: np.ndarray, fps: float) -> dict[str, np.ndarray]:
-    """Name -> [N, D] codes of a grid's windows, for the names among "motion", "body", "view" the network has."""
+def grid_inputs(net: object, split: WorldSplit, grid: np.ndarray, fps: float) -> torch.Tensor:
+    """[N, 30, L] network inputs of the windows of ``grid`` [N, 3] (window, character, view; pitch 0), prepared
+    with ``net``'s preprocessing and statistics, on ``net``'s device."""
     windows = split.windows(grid[:, 0], grid[:, 1], grid[:, 2])  # [N, L, 15, 2]
     size = tuple(split.canvas_size)
     canvas = np.stack([prepare_track(body15_track(w, fps, size), net.preprocess) for w in windows])  # [N, L, 15, 2]
+    return joints_to_channels(torch.from_numpy(canvas), net.stats).to(net.device, torch.float32)
+
+
+def _grid_codes(net: object, split: WorldSplit, grid: np.ndarray, fps: float) -> dict[str, np.ndarray]:
+    """Name -> [N, D] codes of a grid's windows, for the names among "motion", "body", "view" the network has."""
+    x = grid_inputs(net, split, grid, fps)  # [N, 30, L]
     model = net.model
-    x = joints_to_channels(torch.from_numpy(canvas), net.stats).to(net.device, torch.float32)  # [N, 30, L]
     encoders = {"motion": model.encode_motion}
     if model.body_encoder is not None:
         encoders["body"] = model.encode_body
@@ -121,7 +127,7 @@ def code_silhouettes(
     """
     per_grid: list[dict[str, float]] = []
     for g in range(config.code_grids):
-        grid = _code_grid(split, config, g)  # [N, 3]
+        grid = code_grid(split, config, g)  # [N, 3]
         codes = _grid_codes(net, split, grid, fps)
         all_labels = {"motion": grid[:, 0], "body": grid[:, 1], "view": grid[:, 2]}
         labels = {name: all_labels[name] for name in codes}

@@ -28,6 +28,8 @@ class EvalConfig:
         code_grids: silhouette grids, each a new draw of motions and characters (grid 0 is the one earlier
             versions drew alone); their mean and its standard error are reported, as one grid of six characters
             moves by several hundredths with the characters drawn.
+        probe_steps: training steps of a proportion probe (:mod:`retarget.evaluate.probe`) scored on the same
+            grids as the skeleton codes (0: none).
         noise: detector noise: every joint of the driver and reference tracks the methods see is moved by
             Gaussian noise of this std, as a fraction of that person's height (0 = clean; real OpenPose tracks
             measure about 0.002-0.006). The truth stays clean.
@@ -41,13 +43,14 @@ class EvalConfig:
     max_yaw: float = 90.0
     code_samples: int = 6
     code_grids: int = 10
+    probe_steps: int = 0
     noise: float = 0.0
 
     def __post_init__(self) -> None:
         if self.pairs < 1 or self.length < 8 or self.reference_length < 8:
             raise ValueError("pairs must be >= 1 and length, reference_length >= 8")
-        if self.code_samples < 2 or self.code_grids < 1 or self.max_pitch < 0:
-            raise ValueError("code_samples must be >= 2, code_grids >= 1 and max_pitch >= 0")
+        if self.code_samples < 2 or self.code_grids < 1 or self.probe_steps < 0 or self.max_pitch < 0:
+            raise ValueError("code_samples must be >= 2, code_grids >= 1, probe_steps >= 0 and max_pitch >= 0")
         if not 0 <= self.max_yaw <= 90:
             raise ValueError("max_yaw must be in [0, 90] degrees")
         if not 0 <= self.noise <= 0.1:

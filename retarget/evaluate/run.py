@@ -187,7 +187,7 @@ def _document(
         "remarks": rows.remarks,
     }
     doc["notes"] = report_notes(doc)
-    doc["code_plots"] = _plot_files(list(silhouettes))
+    doc["code_plots"] = _plot_files([name for name in silhouettes if name in rows.nets])
     return doc
 
 
@@ -221,6 +221,7 @@ def run_eval(
     overwrite: bool = False,
     world_seed: int | None = None,
     refine_steps: int | None = None,
+    probe_split: WorldSplit | None = None,
     progress: Progress | None = None,
 ) -> tuple[dict, str]:
     """Evaluate every method; write ``eval.json``, ``eval.md`` and ``codes_<network>.png`` into ``out`` atomically.
@@ -244,6 +245,9 @@ def run_eval(
             among the cases.
         refine_steps: motion-code refinement steps of ours and ``compare`` (None: inference's default); the
             authors' models run without refinement, as released.
+        probe_split: the split a proportion probe learns from (the training split) when ``config.probe_steps``
+            is above 0; its silhouettes join the networks' as the row :data:`~retarget.evaluate.probe.PROBE_ROW`,
+            its inputs prepared as the first network row's.
         progress: ``progress(done, total)`` over all cases and silhouette grids.
 
     Returns:
@@ -258,7 +262,8 @@ def run_eval(
     check_new_output(out, overwrite)
     rows = _gather_rows(weights, compare or {}, official, device, world_seed, refine_steps)
     sources = _case_sources(split, bvh, config, fps)
-    total = config.pairs * len(sources) + len(rows.nets)
+    probing = config.probe_steps > 0 and probe_split is not None and bool(rows.nets)
+    total = config.pairs * len(sources) + len(rows.nets) + int(probing)
     done = 0
 
     def tick(step: int, _: int) -> None:
@@ -280,6 +285,17 @@ def run_eval(
         plots[name] = (codes, labels)
         done += 1
         tick(0, total)
+    if probing:
+        from retarget.evaluate.probe import PROBE_ROW, ProbeConfig, probe_silhouettes, train_probe
+
+        first = next(iter(rows.nets.values()))
+        probe = train_probe(probe_split, first, ProbeConfig(steps=config.probe_steps, seed=config.seed), fps)
+        silhouettes[PROBE_ROW], silhouette_errors[PROBE_ROW] = probe_silhouettes(probe, first, split, config, fps)
+        done += 1
+        tick(0, total)
+    elif config.probe_steps > 0:
+        rows.remarks.append("proportion probe: not trained (no network row to share its preprocessing, or no "
+                            "training split given).")
     doc = _document(split, config, bvh, rows, results, real_results, silhouettes, silhouette_errors)
     table = _write(out, overwrite, doc, plots, started)
     log.info("evaluation written to %s in %.0f s", out, doc["seconds"])

@@ -180,6 +180,7 @@ options("retarget eval", EVAL, [b.mocap_empty], {
     "--pairs": BAD_COUNTS, "--length": ["15", "nan", "999999999"], "--threads": ["0"], "--split": ["bogus"],
     "--noise": ["-0.1", "nan", "0.5"], "--max-yaw": ["-1", "nan", "91"], "--max-pitch": ["-1", "nan", "61"],
     "--reference-length": ["0", "9999999"], "--code-grids": ["0", "nan", "1001"],
+    "--probe-steps": ["-1", "nan", "1000001"],
 })
 paths("retarget eval", EVAL[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out", ["{t}/olddir", "{t}/old.npz",
                                                                           "{t}/blocker/e"])

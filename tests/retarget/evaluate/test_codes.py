@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from retarget.evaluate import EvalConfig, code_silhouettes, pca_2d, silhouette
-from retarget.evaluate.codes import _code_grid
+from retarget.evaluate.codes import code_grid
 from retarget.evaluate.run import network_method
 from retarget.world import MotionWorld
 
@@ -72,8 +72,8 @@ def test_silhouettes_average_grids_that_keep_the_first(tiny_mocap: Path, cache: 
     split = MotionWorld.build(tiny_mocap, cache).split("test")
     net = network_method(tiny_weights, refine_steps=0)[1]
     one = EvalConfig(pairs=1, code_grids=1)
-    first = _code_grid(split, one, 0)
-    again = _code_grid(split, one, 1)
+    first = code_grid(split, one, 0)
+    again = code_grid(split, one, 1)
     assert np.array_equal(np.unique(first[:, 2]), np.unique(again[:, 2]))  # the same views
     assert not np.array_equal(first, again)  # other windows and characters
     scores, errors, codes, labels = code_silhouettes(net, split, one)

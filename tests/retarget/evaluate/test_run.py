@@ -21,7 +21,8 @@ def test_cli_writes_the_table_plots_and_json(
     args = ["retarget", "eval", "--mocap", str(tiny_mocap), "--cache", str(cache), "--weights", str(tiny_weights),
             "--compare", f"no triplet={tiny_weights}", "--bvh", str(tiny_mocap / Path(TINY[0]).name),
             "--official", str(shared_dir / "official_2dmr" / "weights"),
-            "--pairs", "3", "--split", "val", "--threads", "1", "--device", "cpu", "--out", str(out)]  # fmt: skip
+            "--pairs", "3", "--split", "val", "--threads", "1", "--device", "cpu", "--out", str(out),
+            "--probe-steps", "3"]  # fmt: skip
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     doc = json.loads((out / "eval.json").read_text())
@@ -38,12 +39,14 @@ def test_cli_writes_the_table_plots_and_json(
     assert set(doc["silhouettes"]["authors' view-only"]) == {"motion", "view"}
     assert set(doc["silhouette_errors"]["authors' view-only"]) == {"motion", "view"}
     assert all(v > 0 for v in doc["silhouette_errors"]["ours"].values())  # ten grids that differ
+    assert set(doc["silhouettes"]["proportion probe"]) == {"body"}  # scored as a skeleton code only
     assert sorted(p.name for p in out.glob("*.png")) == [
         "codes_authors_full.png", "codes_authors_skeleton_only.png", "codes_authors_view_only.png",
         "codes_no_triplet.png", "codes_ours.png",
     ]
     table = (out / "eval.md").read_text()
     assert "| ours |" in table and "| 3D rotation copy |" in table and "h² × 10⁻³" in table
+    assert "| proportion probe | – |" in table and "trained for 3 steps" in table
     # ours and --compare rows refine motion codes as inference does; the authors' run as released
     assert doc["methods"]["ours"]["refine_steps"] == doc["methods"]["no triplet"]["refine_steps"] == str(REFINE_STEPS)
     assert doc["methods"]["authors' full"]["refine_steps"] == "0"
