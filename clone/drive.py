@@ -104,17 +104,21 @@ def retargeting_weights(model: ReferenceModel, weights: str | os.PathLike | None
 
 
 def retarget_onto(
-    driver: PoseTrack, model: ReferenceModel, weights: str | os.PathLike | None, device: str = "cpu"
+    driver: PoseTrack, model: ReferenceModel, weights: str | os.PathLike | None, device: str = "cpu",
+    refine_steps: int | None = None,
 ) -> PoseTrack:
     """The driver's motion performed by the reference, in the reference's pixels (retargeting network).
 
     Uses the codes stored in the model when the same weights made them; otherwise computes them from the
-    reference track stored in the model.
+    reference track stored in the model. ``refine_steps``: motion-code refinement steps (None: inference's
+    default; 0: the encoder's codes as they are, on the numpy backend when the weights have an export).
     """
     from retarget.api import ReferenceCodes, load_retargeter
+    from retarget.inference import InferenceConfig
 
     path = retargeting_weights(model, weights)
-    retargeter = load_retargeter(path, device=device)
+    config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
+    retargeter = load_retargeter(path, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")
     if model.reference_codes is not None and file_sha256(path) == model.codes_weights:
         codes = ReferenceCodes.from_dict(model.reference_codes)
     else:
@@ -141,6 +145,7 @@ def global_scale_to(driver: PoseTrack, target: ScaleStats, image_size: tuple[int
 def drive_poses(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
     device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+    refine_steps: int | None = None,
 ) -> tuple[PoseTrack, StageFit | None]:
     """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
 
@@ -154,6 +159,7 @@ def drive_poses(
             part of the frame the reference occupied (:func:`clone.stage.fit_to_stage`); ``raw`` does not.
         foot_lock: clean up the ``retarget`` result's foot skating with the driver's foot contacts
             (:func:`pose_io.feet.lock_feet`), before the stage fit, which moves the whole track at once.
+        refine_steps: motion-code refinement steps of ``retarget`` (see :func:`retarget_onto`).
 
     Returns:
         ``(track, fit)``; ``fit`` is None when the stage was not applied (``raw``, or ``--method none``).
@@ -170,7 +176,7 @@ def drive_poses(
                         "as they are", *driver.image_size, *model.canvas.image_size)
         return driver.replace(image_size=model.canvas.image_size), None
     if method is Method.RETARGET:
-        driven = retarget_onto(driver, model, weights, device)
+        driven = retarget_onto(driver, model, weights, device, refine_steps)
     else:
         driven = global_scale_onto(driver, model)
     return finish_driven(driven, driver, model.reference_track, method is Method.RETARGET, stage, foot_lock)
@@ -198,10 +204,11 @@ def finish_driven(
 def move_onto_reference(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
     device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+    refine_steps: int | None = None,
 ) -> PoseTrack:
     """The driver's poses in the reference's pixels (see :func:`drive_poses`, which also says how far they
     were moved to stay on the reference's stage)."""
-    return drive_poses(driver, model, method, weights, device, stage, foot_lock)[0]
+    return drive_poses(driver, model, method, weights, device, stage, foot_lock, refine_steps)[0]
 
 
 # ------------------------------------------------------------------------------------------------ command
@@ -235,6 +242,7 @@ def drive(
     progress: Callable[[int, int], None] | None = None,
     runtime: str = "auto",
     foot_lock: bool = True,
+    refine_steps: int | None = None,
 ) -> DriveResult:
     """Make a video of the reference performing the driver's motion.
 
@@ -255,6 +263,7 @@ def drive(
         runtime: the generator's runtime: ``auto`` (int8 ONNX Runtime on a CPU when the ``fast`` extra is
             installed, else torch), ``torch``, ``onnx`` or ``int8`` (see :func:`clone.generate.build_drive_generator`).
         foot_lock: clean up foot skating of ``retarget`` with the driver's contacts (see :func:`drive_poses`).
+        refine_steps: motion-code refinement steps of ``retarget`` (None: inference's default; 0: none, fastest).
 
     Returns:
         What was written.
@@ -282,7 +291,7 @@ def drive(
     check_new_output(out, overwrite)
     model = load_reference_model(model_path)
     driver = read_driver(driver_path, max_gap)
-    driven, fit = drive_poses(driver, model, method, weights, str(device), stage, foot_lock)
+    driven, fit = drive_poses(driver, model, method, weights, str(device), stage, foot_lock, refine_steps)
     poses_path = Path(poses_out) if poses_out is not None else None
     if poses_path is not None:
         check_poses_out(driven, poses_path, overwrite)

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import DEVICE_HELP, console, user_errors
+from clone.cli.common import DEVICE_HELP, MAX_REFINE_STEPS, RefineStepsOption, console, user_errors
 
 _CHARACTER_HELP = (
     "A preset (standard, bighead, stubby, longarms, chibi) or a JSON file of part factors on a standard body, "
@@ -43,6 +43,7 @@ def cartoon_command(
     ] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")] = False,
+    refine_steps: RefineStepsOption = None,
 ) -> None:
     """Retarget DRIVER's motion onto a cartoon character, hold its proportions, draw it; report limb errors."""
     import json
@@ -51,17 +52,19 @@ def cartoon_command(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
-    from clone.outputs import FOLDER, check_output
+    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
     from pose_io.video import VideoWriter
     from pose_io.writers import write_track
     from retarget.api import load_retargeter
+    from retarget.inference import InferenceConfig
     from retarget.runtime import configure_threads
 
     start = time.perf_counter()
     check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
+    check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     report = report if report is not None else out.with_suffix(".json")
     check_output(report, "--report", suffixes=(".json",), overwrite=overwrite)
     if poses is not None:
@@ -72,7 +75,8 @@ def cartoon_command(
     spec = load_character(character)
     track = read_track(driver, image_size=parse_size(size) if size else None)
     configure_threads()
-    retargeter = load_retargeter(weights, device)
+    retargeter = load_retargeter(weights, device, config=None if refine_steps is None else
+                                 InferenceConfig(refine_steps=refine_steps))  # fmt: skip
     cartoon = make_cartoon(track, spec, retargeter, yaw=yaw, name=str(driver))
     with Progress(TextColumn("[bold]drawing"), BarColumn(), MofNCompleteColumn(), console=console,
                   transient=True) as bar, VideoWriter(out, track.fps, overwrite=overwrite) as video:  # fmt: skip

@@ -16,7 +16,9 @@ import typer
 from clone.cli.choices import Align, CanvasMode, Method, StageMode
 from clone.cli.common import (
     DEVICE_HELP,
+    MAX_REFINE_STEPS,
     MAX_THREADS,
+    RefineStepsOption,
     console,
     resolve_device_option,
     training_device,
@@ -187,6 +189,7 @@ def drive(
         help="--method retarget: hold the feet still while the driver's feet touch the ground (moves the body "
         "against the slide, then the ankles, knees re-solved; removes foot skating at the same pose error).")
     ] = True,
+    refine_steps: RefineStepsOption = None,
 ) -> None:
     """Make a video of the reference performing the driver's motion."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -196,6 +199,7 @@ def drive(
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--max-gap", max_gap, 0, MAX_GAP)
+    check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
     if poses_out is not None:
         check_output(poses_out, "--poses-out", suffixes=(FOLDER, ".npz", ".csv"), overwrite=overwrite)
@@ -207,7 +211,7 @@ def drive(
         task = bar.add_task("drive", total=None)
         result = run_drive(
             drive_poses, out, model_path=model, method=method.value, stage=stage.value, poses_out=poses_out,
-            side_by_side=side_by_side, foot_lock=foot_lock,
+            side_by_side=side_by_side, foot_lock=foot_lock, refine_steps=refine_steps,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap, runtime=runtime,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )

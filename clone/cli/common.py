@@ -106,6 +106,15 @@ WorldCacheOption = Annotated[
     Path | None, typer.Option("--cache", help="World cache folder (default: ~/.cache/clone2d/world).")
 ]
 
+MAX_REFINE_STEPS = 1000
+# --refine-steps of the commands that retarget a driver onto a reference (drive, report, cartoon).
+RefineStepsOption = Annotated[
+    int | None,
+    typer.Option("--refine-steps", help="Retargeting: gradient steps that refine each driver window's motion code "
+                 "before it is decoded onto the reference (default: 30; fewer are faster: 5 cost a sixth; 0: the "
+                 "network alone, on numpy when the weights have an export, the fastest)."),
+]
+
 
 def named_checkpoints(items: list[str] | None, taken: tuple[str, ...] = ()) -> dict[str, Path]:
     """``--compare NAME=PATH`` values by name; InputError for a malformed one or a name in ``taken`` or repeated."""

@@ -11,7 +11,7 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import StageMode
-from clone.cli.common import DEVICE_HELP, console, user_errors
+from clone.cli.common import DEVICE_HELP, MAX_REFINE_STEPS, RefineStepsOption, console, user_errors
 
 # The primary pose measure first (with ground truth), as on the page; rows a run lacks are left out.
 _HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssim", "psnr_background",
@@ -51,18 +51,20 @@ def report_command(
             "each method left them.",
         ),
     ] = StageMode.REFERENCE,
+    refine_steps: RefineStepsOption = None,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
     from rich.table import Table
 
     from clone.metrics import METRICS
-    from clone.outputs import FOLDER, check_output
+    from clone.outputs import FOLDER, check_number, check_output
     from clone.report import REPORT_METHODS, make_report
     from pose_io.errors import InputError
     from retarget.runtime import configure_threads, resolve_device
 
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
+    check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
     for name, path in (("DRIVE_POSES", drive_poses), ("--model", model), ("--gt-poses", gt_poses),
                        ("--gt-frames", gt_frames), ("--weights", weights)):
         if path is not None and not path.exists():
@@ -78,7 +80,7 @@ def report_command(
         run = make_report(
             drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
             device=dev, weights=weights, progress=lambda done, total: bar.update(task, completed=done, total=total),
-            stage=stage.value,
+            stage=stage.value, refine_steps=refine_steps,
         )  # fmt: skip
     table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")
     table.add_column("measure")

@@ -17,6 +17,7 @@ import typer
 from clone.cli.choices import OutputFormat, Split
 from clone.cli.common import (
     DEVICE_HELP,
+    MAX_REFINE_STEPS,
     MAX_THREADS,
     CompareOption,
     WorldCacheOption,
@@ -39,7 +40,6 @@ MAX_PAIRS = 1_000_000
 MAX_CODE_GRIDS = 1_000  # 216 windows each
 MAX_PROBE_STEPS = 1_000_000
 MAX_LENGTH = 100_000
-MAX_REFINE_STEPS = 1000
 
 _SIZE_HELP = "Image size WxH of inputs that store none (OpenPose JSON); default: inferred from the data."
 

@@ -226,6 +226,7 @@ def make_report(
     max_gap: int = 5,
     progress: Callable[[int, int], None] | None = None,
     stage: str = "reference",
+    refine_steps: int | None = None,
 ) -> ReportRun:
     """Drive the reference model with both methods, measure them and write the report folder.
 
@@ -241,6 +242,7 @@ def make_report(
         max_gap: fill driver gaps of at most this many frames.
         progress: called with (frames done, total) after every frame.
         stage: ``reference`` or ``raw`` (see ``clone.drive.drive_poses``).
+        refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
 
     Returns:
         Where the page is and the summary numbers.
@@ -259,7 +261,7 @@ def make_report(
     truth_frames = None if gt_frames is None else open_gt_frames(gt_frames, total, canvas.image_size)
     ref = model.reference_track
     reference = (reference_limb_lengths(ref.joints, ref.layout), skeleton_height(ref.joints, ref.layout))
-    moved = {m: drive_poses(driver, model, m, weights, device, stage) for m in REPORT_METHODS}
+    moved = {m: drive_poses(driver, model, m, weights, device, stage, refine_steps=refine_steps) for m in REPORT_METHODS}
     driven = {m: track for m, (track, _fit) in moved.items()}
     shares = {m: fit.share for m, (_track, fit) in moved.items() if fit is not None}
     truth_canvas = None if truth is None else image_to_canvas(truth.joints, canvas)  # [T, J, 2] canvas px

@@ -237,7 +237,7 @@ models("drive", DRIVE, [b.poses_npz], "--model")
 add("drive default model missing", DRIVE, [b.poses_npz])
 options("drive", [*DRIVE, "--model", "{t}/garbage.pt"], [b.poses_npz, b.garbage_pt], {
     "--max-gap": ["-1", "99999999999"], "--threads": ["0"], "--method": ["bogus"], "--device": ["tpu"],
-    "--stage": ["bogus", "RAW", ""], "--runtime": ["bogus", ""],
+    "--stage": ["bogus", "RAW", ""], "--runtime": ["bogus", ""], "--refine-steps": ["-1", "nan", "1001"],
 })
 paths("drive", DRIVE[:2], [b.poses_npz, *EVERY_OUTPUT], "--out",
       ["{t}/result", "{t}/out.avi", "{t}/old.mp4", "{t}/folder.mp4", "{t}/blocker/o.mp4", "/proc/o.mp4"])
@@ -254,7 +254,7 @@ paths("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_
 paths("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_pt], "--gt-frames",
       ["{t}/missing_frames"])
 options("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreign_pt],
-        {"--device": ["bogus"], "--stage": ["bogus", ""]})
+        {"--device": ["bogus"], "--stage": ["bogus", ""], "--refine-steps": ["-1", "1001"]})
 add("report missing driver", ["report", "{t}/missing.npz", "--out", "{t}/rep", "--model", "{t}/foreign.pt"],
     [b.foreign_pt])
 
@@ -321,7 +321,8 @@ add("search eval missing mocap", ["search", "eval", "--mocap", "{t}/nomocap"])
 # ------------------------------------------------------------------------------------------------ cartoon
 
 CARTOON = ["cartoon", "{t}/poses.npz", "--character", "standard", "--out", "{t}/c.mp4", "--device", "cpu"]
-options("cartoon", CARTOON, [b.poses_npz], {"--yaw": ["nan", "inf", "91", "-91"], "--size": ["0x0"]})
+options("cartoon", CARTOON, [b.poses_npz], {"--yaw": ["nan", "inf", "91", "-91"], "--size": ["0x0"],
+                                            "--refine-steps": ["-1", "1001"]})
 paths("cartoon", CARTOON[:4], [b.poses_npz, *EVERY_OUTPUT], "--out",
       ["{t}/c.avi", "{t}/c", "{t}/old.mp4", "{t}/folder.mp4", "{t}/blocker/c.mp4", "/proc/c.mp4"])
 paths("cartoon", CARTOON, [b.poses_npz, *EVERY_OUTPUT], "--report",
