@@ -54,6 +54,11 @@ class LossConfig:
             centre to the nearest other character's in the batch: the silhouette the paper reports, on the
             hardest negatives a batch holds.
         skeleton_cluster_ratio: that ratio.
+        skeleton_proportion_weight: weight of the skeleton-proportion term (0 = off; not in the paper; needs the
+            samples' ids and the training characters' proportions): the distances between the batch's skeleton
+            codes should follow the distances between their characters' proportions (standardised log bone
+            lengths over height), each divided by its mean: codes of one character together, codes of two
+            characters as far apart as their bodies differ.
     """
 
     cross: bool = True
@@ -68,6 +73,7 @@ class LossConfig:
     skeleton_ratio: float = 0.5
     skeleton_cluster_weight: float = 0.0
     skeleton_cluster_ratio: float = 0.5
+    skeleton_proportion_weight: float = 0.0
 
 
 
@@ -141,7 +147,7 @@ def _codes(model: RetargetNet, x: torch.Tensor) -> dict[int, torch.Tensor]:
 
 def objective(
     model: RetargetNet, inputs: torch.Tensor, targets: torch.Tensor, stats: NormStats, config: LossConfig,
-    ids: torch.Tensor | None = None,
+    ids: torch.Tensor | None = None, proportions: torch.Tensor | None = None,
 ) -> dict[str, torch.Tensor]:
     """Losses of one batch of 8-combination samples.
 
@@ -152,6 +158,8 @@ def objective(
         stats: normalisation statistics (for the foot velocity).
         config: loss terms and weights.
         ids: [B, 2, 3] (motion, character, view) ids of the two triples (for the skeleton-cluster term).
+        proportions: [C, P] the characters' standardised log proportions, indexed by ``ids`` (for the
+            skeleton-proportion term; without them the term is left out, as in validation on other characters).
 
     Returns:
         Named loss terms (already weighted) and their sum under ``"total"``.
@@ -202,8 +210,29 @@ def objective(
         losses["skeleton_cluster"] = config.skeleton_cluster_weight * skeleton_cluster_loss(
             per_character, ids[:, :, SKELETON], config.skeleton_cluster_ratio
         )
+    if config.skeleton_proportion_weight > 0 and SKELETON in triple and ids is not None and proportions is not None:
+        codes = triple[SKELETON].flatten(2).flatten(0, 1)  # [2B, D]: triple 0's, then triple 1's
+        characters = ids[:, :, SKELETON].transpose(0, 1).flatten()  # [2B] in the same order
+        losses["skeleton_proportion"] = config.skeleton_proportion_weight * skeleton_proportion_loss(
+            codes, proportions[characters]
+        )
     losses["total"] = sum(losses.values())
     return losses
+
+
+def skeleton_proportion_loss(codes: torch.Tensor, proportions: torch.Tensor) -> torch.Tensor:
+    """Mean squared difference of the pairwise code distances and proportion distances, each over its mean.
+
+    Args:
+        codes: [N, D] skeleton codes.
+        proportions: [N, P] their characters' proportions (standardised).
+    """
+    def distances(x: torch.Tensor) -> torch.Tensor:
+        d = ((x[:, None] - x[None]) ** 2).sum(dim=-1).add(1e-8).sqrt()  # [N, N]; smooth at 0
+        off = ~torch.eye(len(x), dtype=torch.bool, device=x.device)
+        return d[off] / d[off].mean().clamp_min(1e-6)
+
+    return ((distances(codes) - distances(proportions.to(codes.dtype))) ** 2).mean()
 
 
 def _skeleton_codes(

@@ -95,6 +95,11 @@ def train(
         float, typer.Option("--skeleton-cluster-ratio", min=0.0, help="The spread --skeleton-cluster-weight asks "
                             "for, in distances to the nearest other character.")
     ] = 0.5,
+    skeleton_proportion_weight: Annotated[
+        float, typer.Option("--skeleton-proportion-weight", min=0.0, help="Weight of a term asking the distances "
+                            "between skeleton codes to follow the distances between their characters' proportions "
+                            "(0 = the paper).")
+    ] = 0.0,
     extra_characters: Annotated[
         int, typer.Option("--extra-characters", min=0, help="Training characters added to the world's 64 (their "
                           "own random draws; validation and test characters unchanged).")
@@ -175,7 +180,7 @@ def train(
             triplet_weight=triplet_weight, triplet_margin=triplet_margin, spread_weight=spread_weight,
             cycle_weight=cycle_weight, skeleton_ratio_weight=skeleton_ratio_weight,
             skeleton_cluster_weight=skeleton_cluster_weight,
-            skeleton_cluster_ratio=skeleton_cluster_ratio,
+            skeleton_cluster_ratio=skeleton_cluster_ratio, skeleton_proportion_weight=skeleton_proportion_weight,
         )
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,

@@ -33,7 +33,7 @@ from retarget.training.data import (
     real_windows,
     split_statistics,
 )
-from retarget.training.step import TrainLoss, evaluate, train_step
+from retarget.training.step import TrainLoss, character_proportions, evaluate, train_step
 
 log = logging.getLogger(__name__)
 
@@ -199,7 +199,8 @@ def fit(
             stats = split_statistics(train_split, config.window, config.stats_windows, config.seed, scales)
         training = None
     model.to(dev)
-    step_loss = distributed.wrap(TrainLoss(model, stats, config), dev)  # DDP with several processes
+    proportions = character_proportions(train_split).to(dev) if config.loss.skeleton_proportion_weight > 0 else None
+    step_loss = distributed.wrap(TrainLoss(model, stats, config, proportions), dev)  # DDP with several processes
     dtype = distributed.amp_dtype(dev, amp)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=config.amsgrad)
     scheduler = torch.optim.lr_scheduler.ExponentialLR(optimizer, config.lr_decay)

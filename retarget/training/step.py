@@ -84,13 +84,18 @@ class TrainLoss(nn.Module):
         net: the network.
         stats: normalisation statistics.
         config: settings.
+        proportions: [C, P] the training characters' standardised log proportions (:func:`character_proportions`),
+            for the skeleton-proportion term.
     """
 
-    def __init__(self, net: RetargetNet, stats: NormStats, config: TrainConfig) -> None:
+    def __init__(
+        self, net: RetargetNet, stats: NormStats, config: TrainConfig, proportions: torch.Tensor | None = None
+    ) -> None:
         super().__init__()
         self.net = net
         self.stats = stats
         self.config = config
+        self.proportions = proportions  # [C, P] the training characters' (skeleton-proportion term)
 
     def forward(
         self, inputs: torch.Tensor, targets: torch.Tensor, real_inputs: torch.Tensor | None = None,
@@ -111,7 +116,7 @@ class TrainLoss(nn.Module):
             ``weight * synthetic total + real term``.
         """
         cfg = self.config
-        losses = objective(self.net, inputs, targets, self.stats, cfg.loss, ids)
+        losses = objective(self.net, inputs, targets, self.stats, cfg.loss, ids, self.proportions)
         minimise = losses["total"] if weight == 1.0 else weight * losses["total"]
         if real_inputs is not None and real_targets is not None:
             real = self_reconstruction(self.net, real_inputs, real_targets, self.stats, cfg.loss)
@@ -119,6 +124,14 @@ class TrainLoss(nn.Module):
             losses["total"] = losses["total"] + losses["real"]
             minimise = minimise + losses["real"]
         return losses, minimise
+
+
+def character_proportions(split) -> torch.Tensor:  # split: retarget.world.split.WorldSplit
+    """[C, bones] float32: the split's characters' log(bone length / skeleton height), standardised over them."""
+    import numpy as np
+
+    logs = np.log(np.array([c.array / c.height for c in split.characters]))
+    return torch.from_numpy((logs - logs.mean(axis=0)) / (logs.std(axis=0) + 1e-9)).float()
 
 
 def train_step(

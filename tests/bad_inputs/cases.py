@@ -161,7 +161,7 @@ options("retarget train", TRAIN, [b.mocap_empty], {
     "--triplet-margin": ["-1", "inf"], "--spread-weight": ["nan"], "--cycle-weight": ["-1", "nan"],
     "--extra-characters": ["-1", "99999"], "--extra-spread": ["0", "nan", "9"], "--batch-size": ["0", "999999999"],
     "--max-pitch": ["-1", "nan", "61"], "--perspective": ["-0.1", "nan", "1.5"],
-    "--frontal-share": ["-0.1", "nan", "1.5"],
+    "--frontal-share": ["-0.1", "nan", "1.5"], "--skeleton-proportion-weight": ["-1", "nan"],
     "--workers": ["-1", "999999"], "--threads": ["0", "9999999"], "--variant": ["bogus"], "--ablation": ["x"],
 })
 paths("retarget train", TRAIN[:4], [b.mocap_empty, *EVERY_OUTPUT], "--out",

@@ -10,6 +10,7 @@ from retarget.losses import (
     foot_velocity,
     objective,
     skeleton_cluster_loss,
+    skeleton_proportion_loss,
     skeleton_ratio_loss,
     trajectory_error,
     used_combos,
@@ -149,6 +150,27 @@ def test_skeleton_cluster_is_scale_free_and_takes_the_nearest_other_character():
     losses = objective(net, x, x, _stats(), LossConfig(skeleton_cluster_weight=1.0), ids)
     assert "skeleton_cluster" in losses and float(losses["skeleton_cluster"].detach()) >= 0
     assert "skeleton_cluster" not in objective(net, x, x, _stats(), LossConfig(skeleton_cluster_weight=1.0))
+
+
+def test_skeleton_proportion_is_scale_free_and_zero_when_codes_follow_the_bodies():
+    props = torch.tensor([[0.0, 0.0], [0.0, 0.0], [3.0, 4.0], [6.0, 8.0]])  # samples 0, 1: one character
+    codes = torch.cat([props, torch.zeros(4, 3)], dim=1) * 7.0 + 2.0  # the same layout, scaled and moved
+    assert float(skeleton_proportion_loss(codes, props)) < 1e-6
+    apart = codes.clone()
+    apart[1] += 5.0  # one character's two codes apart: the distances no longer follow the bodies
+    assert float(skeleton_proportion_loss(apart, props)) > 0.01  # 0.019
+    torch.testing.assert_close(skeleton_proportion_loss(3 * apart, props), skeleton_proportion_loss(apart, props))
+    net = RetargetNet().eval()
+    x = torch.randn(2, 8, 30, 32)
+    ids = torch.tensor([[[0, 1, 0], [1, 2, 1]], [[2, 3, 0], [3, 1, 1]]])
+    table = torch.randn(4, 17)
+    config = LossConfig(skeleton_proportion_weight=2.0)
+    losses = objective(net, x, x, _stats(), config, ids, table)
+    # codes in the order of the two triples, then samples; characters likewise
+    codes = torch.cat([net.encode_body(x[:, 0]).flatten(1), net.encode_body(x[:, combo_index(1, 1, 1)]).flatten(1)])
+    expected = 2.0 * skeleton_proportion_loss(codes, table[torch.tensor([1, 3, 2, 1])])
+    torch.testing.assert_close(losses["skeleton_proportion"], expected, rtol=1e-4, atol=1e-6)
+    assert "skeleton_proportion" not in objective(net, x, x, _stats(), config, ids)  # no table: validation
 
 
 def test_cycle_term_is_the_round_trip_through_the_next_windows_codes():

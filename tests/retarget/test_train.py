@@ -423,3 +423,38 @@ def test_config_keeps_its_camera_spread_and_old_configs_get_the_worlds():
     old = TrainConfig().to_dict()
     del old["cameras"]
     assert TrainConfig.from_dict(old).cameras == CameraSpread()
+
+
+def test_fit_feeds_the_training_characters_proportions_to_the_skeleton_proportion_term(tmp_path, monkeypatch):
+    from retarget.training import loop
+
+    seen = []
+
+    def table(split):  # the fake split's characters are not Skeletons; any [C, P] table will do
+        seen.append(split)
+        return torch.randn(split.num_characters, 5, generator=torch.Generator().manual_seed(0))
+
+    monkeypatch.setattr(loop, "character_proportions", table)
+    train, val = FakeSplit(), FakeSplit(seed=1)
+    config = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, skeleton_proportion_weight=1.0))
+    summary = fit(train, val, tmp_path / "r.pt", config, epochs=1)
+    assert seen == [train]  # the training split's, not validation's (other characters)
+    assert summary.history[-1]["train_skeleton_proportion"] > 0
+    assert "val_skeleton_proportion" not in summary.history[-1]
+    fit(train, val, tmp_path / "plain.pt", TINY, epochs=1)
+    assert seen == [train]  # not asked for without the term
+
+
+def test_character_proportions_are_standardised_log_ratios():
+    from types import SimpleNamespace
+
+    from retarget.training.step import character_proportions
+    from retarget.world.characters import make_skeleton
+
+    bodies = [make_skeleton(1.8), make_skeleton(1.2), make_skeleton(1.7, legs=1.1, head=0.9)]
+    table = character_proportions(SimpleNamespace(characters=bodies))
+    assert table.shape == (3, len(bodies[0].lengths)) and table.dtype == torch.float32
+    torch.testing.assert_close(table.mean(dim=0), torch.zeros(table.shape[1]), atol=1e-5, rtol=0)
+    logs = np.log(np.array([b.array / b.height for b in bodies]))
+    expected = (logs - logs.mean(axis=0)) / (logs.std(axis=0) + 1e-9)
+    np.testing.assert_allclose(table.numpy(), expected, atol=1e-5)
