@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import DEVICE_HELP, console, user_errors
+from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, user_errors
 
 
 @user_errors
@@ -23,6 +23,10 @@ def demo_command(
     weights: Annotated[
         Path | None, typer.Option("--weights", help="Retargeting weights (default: the shipped ones).")
     ] = None,
+    threads: Annotated[
+        int | None, typer.Option("--threads", min=1, help="CPU threads (default: the cores the 1-minute load "
+                                 "average leaves free; training steps in the budget scale with them).")
+    ] = None,
 ) -> None:
     """Render a reference and three driver pairs with ground truth; train once; report every pair and sum up."""
     import dataclasses
@@ -33,6 +37,7 @@ def demo_command(
     from retarget.runtime import configure_threads, resolve_device
 
     check_number("--minutes", minutes, 0.1, 7 * 24 * 60.0)
+    check_number("--threads", threads, 1, MAX_THREADS)
     check_out(out)
     if weights is not None and not weights.is_file():
         raise typer.BadParameter(f"{weights}: no such file", param_hint="--weights")
@@ -41,7 +46,7 @@ def demo_command(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--device") from None
     if torch_device.type == "cpu":
-        configure_threads()
+        configure_threads(threads)
     config = QUICK if quick else DemoConfig()
     if minutes is not None:
         config = dataclasses.replace(config, minutes=minutes)

@@ -265,7 +265,8 @@ for path, builder in BAD_MODELS.items():
     if path.endswith(".pt") and not path.endswith("retarget.pt"):
         add(f"demo over an earlier demo --weights {path[4:]}", [*DEMO, "--weights", path],
             [b.earlier_demo, *([builder] if builder else [])])
-options("demo", DEMO, [b.earlier_demo], {"--minutes": ["0", "-1", "nan", "inf", "1e300"], "--device": ["x"]})
+options("demo", DEMO, [b.earlier_demo], {"--minutes": ["0", "-1", "nan", "inf", "1e300"], "--device": ["x"],
+                                         "--threads": ["0", "99999999"]})
 paths("demo", ["demo", "--device", "cpu"], [*EVERY_OUTPUT], "--out",
       ["{t}/olddir", "{t}/old.npz", "{t}/blocker/d", "/proc/d"])
 

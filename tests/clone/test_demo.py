@@ -81,3 +81,26 @@ def test_a_failed_demo_puts_the_earlier_one_back(tmp_path, monkeypatch):
         raise AssertionError("the demo should have failed")
     assert (out / "report.html").read_text() == "earlier page"
     assert [p.name for p in tmp_path.iterdir()] == ["demo"]  # no half-made folder left behind
+
+
+def test_threads_option_sets_torch_threads_before_the_demo_runs(tmp_path, monkeypatch):
+    import torch
+
+    from pose_io.errors import InputError
+
+    seen = []
+
+    def stop(*args, **kwargs):
+        seen.append(torch.get_num_threads())
+        raise InputError("stopped here")
+
+    before = torch.get_num_threads()
+    monkeypatch.setattr(clone.demo, "run_demo", stop)
+    try:
+        for n in (1, 2):
+            result = CliRunner().invoke(app, ["demo", "--out", str(tmp_path / "d"), "--device", "cpu", "--threads",
+                                              str(n)])
+            assert result.exit_code == 2 and "stopped here" in result.output
+    finally:
+        torch.set_num_threads(before)
+    assert seen == [1, 2]
