@@ -103,6 +103,18 @@ def retargeting_weights(model: ReferenceModel, weights: str | os.PathLike | None
                      "gone and none are shipped; pass --weights FILE or use --method global-scale")
 
 
+def load_driving_retargeter(
+    weights: str | os.PathLike | None, device: str = "cpu", refine_steps: int | None = None
+):  # -> retarget.api.Retargeter | NumpyRetargeter
+    """The retargeting network for driving: ``refine_steps`` motion-code refinement steps (None: inference's
+    default); with 0, the numpy backend when the weights have an up-to-date export (nothing to refine there)."""
+    from retarget.api import load_retargeter
+    from retarget.inference import InferenceConfig
+
+    config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
+    return load_retargeter(weights, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")
+
+
 def retarget_onto(
     driver: PoseTrack, model: ReferenceModel, weights: str | os.PathLike | None, device: str = "cpu",
     refine_steps: int | None = None,
@@ -113,12 +125,10 @@ def retarget_onto(
     reference track stored in the model. ``refine_steps``: motion-code refinement steps (None: inference's
     default; 0: the encoder's codes as they are, on the numpy backend when the weights have an export).
     """
-    from retarget.api import ReferenceCodes, load_retargeter
-    from retarget.inference import InferenceConfig
+    from retarget.api import ReferenceCodes
 
     path = retargeting_weights(model, weights)
-    config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
-    retargeter = load_retargeter(path, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")
+    retargeter = load_driving_retargeter(path, device, refine_steps)
     if model.reference_codes is not None and file_sha256(path) == model.codes_weights:
         codes = ReferenceCodes.from_dict(model.reference_codes)
     else:

@@ -52,14 +52,13 @@ def cartoon_command(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
+    from clone.drive import load_driving_retargeter
     from clone.outputs import FOLDER, check_number, check_output
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
     from pose_io.video import VideoWriter
     from pose_io.writers import write_track
-    from retarget.api import load_retargeter
-    from retarget.inference import InferenceConfig
     from retarget.runtime import configure_threads
 
     start = time.perf_counter()
@@ -75,8 +74,7 @@ def cartoon_command(
     spec = load_character(character)
     track = read_track(driver, image_size=parse_size(size) if size else None)
     configure_threads()
-    retargeter = load_retargeter(weights, device, config=None if refine_steps is None else
-                                 InferenceConfig(refine_steps=refine_steps))  # fmt: skip
+    retargeter = load_driving_retargeter(weights, device, refine_steps)
     cartoon = make_cartoon(track, spec, retargeter, yaw=yaw, name=str(driver))
     with Progress(TextColumn("[bold]drawing"), BarColumn(), MofNCompleteColumn(), console=console,
                   transient=True) as bar, VideoWriter(out, track.fps, overwrite=overwrite) as video:  # fmt: skip

@@ -241,8 +241,8 @@ def evaluate(
     probe_steps: Annotated[
         int, typer.Option("--probe-steps", help="Also train a proportion probe for this many steps (about 4,000: 2 "
                           "CPU minutes, 230 MB) on the training split's windows, reading only each character's bone "
-                          "lengths over its height, and score it as a skeleton code: how far one window tells these "
-                          "characters apart. 0: no probe.")
+                          "lengths over its height, and score it as a skeleton code: a reference point for the skeleton "
+                          "codes' silhouette. 0: no probe.")
     ] = 0,
     refine_steps: Annotated[
         int | None,

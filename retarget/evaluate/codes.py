@@ -45,6 +45,12 @@ def silhouette(features: np.ndarray, labels: np.ndarray) -> float:
     return float(s.mean())
 
 
+def mean_and_error(values: list[float]) -> tuple[float, float]:
+    """Mean of per-grid silhouettes and its standard error (0 with one grid)."""
+    v = np.asarray(values, dtype=np.float64)
+    return float(v.mean()), float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else 0.0
+
+
 def pca_2d(features: np.ndarray) -> np.ndarray:
     """[N, D] -> [N, 2] coordinates along the first two principal components."""
     x = torch.as_tensor(np.asarray(features, np.float64))
@@ -134,9 +140,9 @@ def code_silhouettes(
         per_grid.append({name: silhouette(c, labels[name]) for name, c in codes.items()})
         if g == 0:
             first = codes, labels
-    values = {name: np.array([s[name] for s in per_grid]) for name in per_grid[0]}
-    scores = {name: float(v.mean()) for name, v in values.items()}
-    errors = {name: float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else 0.0 for name, v in values.items()}
+    summary = {name: mean_and_error([s[name] for s in per_grid]) for name in per_grid[0]}
+    scores = {name: mean for name, (mean, _) in summary.items()}
+    errors = {name: error for name, (_, error) in summary.items()}
     return scores, errors, *first
 
 

@@ -10,6 +10,7 @@ from retarget.world.camera import MAX_PITCH
 
 Method = Callable[[PoseTrack, PoseTrack], PoseTrack]  # (motion track, reference track) -> retargeted track
 Progress = Callable[[int, int], None]  # progress(done, total)
+PROBE_ROW = "proportion probe"  # the silhouettes row of the proportion probe (EvalConfig.probe_steps)
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,9 @@
 
 The skeleton-code silhouette (:mod:`retarget.evaluate.codes`) asks the skeleton encoder to cluster windows by
 character across motions and views. How high it can go depends on the characters as much as on the encoder: when
-they differ by a few per cent in their proportions, one foreshortened window says little about them. The probe
-bounds this from the data side: a small convolutional network sees the windows exactly as the encoders do (the
+they differ by a few per cent in their proportions, one foreshortened window says little about them. The probe is a
+reference point from the data side (not a bound: encoders trained on more characters can score above it): a small
+convolutional network sees the windows exactly as the encoders do (the
 same preprocessing and statistics) and is trained on the training split for nothing but each character's bone
 lengths over its height (log ratios, standardised); its outputs on the evaluated split's silhouette grids are
 then scored as a skeleton code is. It is a reference point for the skeleton codes, not a retargeting method.
@@ -18,11 +19,11 @@ import torch
 from torch import nn
 
 from pose_io.errors import InputError
-from retarget.evaluate.codes import code_grid, grid_inputs, silhouette
+from retarget.evaluate.codes import code_grid, grid_inputs, mean_and_error, silhouette
 from retarget.evaluate.config import EvalConfig
+from retarget.world.characters import log_proportions
 from retarget.world.split import WorldSplit
 
-PROBE_ROW = "proportion probe"
 _CHUNK = 2000  # windows prepared at a time
 
 
@@ -69,11 +70,6 @@ class ProportionProbe(nn.Module):
         return self.head(self.features(x).amax(dim=-1))
 
 
-def log_proportions(split: WorldSplit) -> np.ndarray:
-    """[C, bones] log(bone length / skeleton height) of the split's characters."""
-    return np.log(np.array([c.array / c.height for c in split.characters]))
-
-
 def train_probe(
     train: WorldSplit, net: object, config: ProbeConfig = ProbeConfig(), fps: float = 30.0
 ) -> ProportionProbe:
@@ -99,7 +95,7 @@ def train_probe(
         grid_inputs(net, train, np.stack([motions[i:i + _CHUNK], characters[i:i + _CHUNK], views[i:i + _CHUNK]], 1), fps)
         for i in range(0, config.samples, _CHUNK)
     ]).cpu()  # fmt: skip
-    target = log_proportions(train)
+    target = log_proportions(train.characters)
     mean, std = target.mean(axis=0), target.std(axis=0) + 1e-9
     y = torch.from_numpy((target - mean) / std).float()[torch.from_numpy(characters)]
     torch.manual_seed(config.seed)
@@ -110,7 +106,8 @@ def train_probe(
     generator = torch.Generator().manual_seed(config.seed)
     for _ in range(config.steps):
         batch = torch.randint(0, config.samples, (config.batch,), generator=generator)
-        inputs = x[batch] + config.noise * torch.randn(x[batch].shape, generator=generator)
+        picked = x[batch]
+        inputs = picked + config.noise * torch.randn(picked.shape, generator=generator)
         loss = ((probe(inputs) - y[batch]) ** 2).mean()
         optimiser.zero_grad()
         loss.backward()
@@ -129,5 +126,5 @@ def probe_silhouettes(
         with torch.inference_mode():
             out = probe(grid_inputs(net, split, grid, fps).cpu()).double().numpy()
         values.append(silhouette(out, grid[:, 1]))
-    v = np.array(values)
-    return {"body": float(v.mean())}, {"body": float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else 0.0}
+    mean, error = mean_and_error(values)
+    return {"body": mean}, {"body": error}

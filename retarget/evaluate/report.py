@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from retarget.evaluate.config import PROBE_ROW
 from retarget.evaluate.real import markdown_rows
 
 
@@ -97,10 +98,10 @@ def report_notes(doc: Mapping) -> list[str]:
                      f"mean ± standard error over {grids} such grids, each with its own motions and characters; "
                      "~1 = clusters by the label, ~0 = the label does not explain the codes. Plots: codes_*.png, "
                      "the first grid's codes along their first two principal components.")  # fmt: skip
-        if cfg.get("probe_steps", 0) and "proportion probe" in doc["silhouettes"]:
+        if cfg.get("probe_steps", 0) and PROBE_ROW in doc["silhouettes"]:
             notes.append(f"proportion probe: not a retargeting method but a reference point for the skeleton codes: a "
                          f"small convolutional network trained for {cfg['probe_steps']} steps on windows of the "
                          "training split, prepared as the first network's inputs, to read nothing but each "
                          "character's bone lengths over its height; its outputs are scored on the same grids as a "
-                         "skeleton code, which says how far one window tells these characters apart.")  # fmt: skip
+                         "skeleton code.")  # fmt: skip
     return notes

@@ -18,7 +18,7 @@ from pose_io.track import PoseTrack
 from retarget.baselines import global_scale_retarget, limb_scale_retarget
 from retarget.evaluate.cases import ClipMotions, evaluate
 from retarget.evaluate.codes import code_silhouettes, plot_codes, silhouette
-from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progress
+from retarget.evaluate.config import DEFAULT_CONFIG, PROBE_ROW, EvalConfig, Method, Progress
 from retarget.evaluate.real import real_pair_results
 from retarget.evaluate.references3d import REFERENCES_3D
 from retarget.evaluate.report import markdown_report, report_notes
@@ -246,7 +246,7 @@ def run_eval(
         refine_steps: motion-code refinement steps of ours and ``compare`` (None: inference's default); the
             authors' models run without refinement, as released.
         probe_split: the split a proportion probe learns from (the training split) when ``config.probe_steps``
-            is above 0; its silhouettes join the networks' as the row :data:`~retarget.evaluate.probe.PROBE_ROW`,
+            is above 0; its silhouettes join the networks' as the row :data:`~retarget.evaluate.config.PROBE_ROW`,
             its inputs prepared as the first network row's.
         progress: ``progress(done, total)`` over all cases and silhouette grids.
 
@@ -286,7 +286,7 @@ def run_eval(
         done += 1
         tick(0, total)
     if probing:
-        from retarget.evaluate.probe import PROBE_ROW, ProbeConfig, probe_silhouettes, train_probe
+        from retarget.evaluate.probe import ProbeConfig, probe_silhouettes, train_probe
 
         first = next(iter(rows.nets.values()))
         probe = train_probe(probe_split, first, ProbeConfig(steps=config.probe_steps, seed=config.seed), fps)

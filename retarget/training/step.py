@@ -128,9 +128,9 @@ class TrainLoss(nn.Module):
 
 def character_proportions(split) -> torch.Tensor:  # split: retarget.world.split.WorldSplit
     """[C, bones] float32: the split's characters' log(bone length / skeleton height), standardised over them."""
-    import numpy as np
+    from retarget.world.characters import log_proportions
 
-    logs = np.log(np.array([c.array / c.height for c in split.characters]))
+    logs = log_proportions(split.characters)
     return torch.from_numpy((logs - logs.mean(axis=0)) / (logs.std(axis=0) + 1e-9)).float()
 
 

@@ -7,6 +7,8 @@ shorter legs. Between 1.1 m and 1.55 m the two are blended.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from retarget.world.skeleton import Skeleton
@@ -109,3 +111,8 @@ NAMED_CHARACTERS: dict[str, Skeleton] = {
 
 
 __all__ = ["MAX_HEIGHT", "MIN_HEIGHT", "NAMED_CHARACTERS", "make_skeleton", "sample_skeleton"]
+
+
+def log_proportions(characters: Sequence[Skeleton]) -> np.ndarray:
+    """[C, bones] log(bone length / skeleton height) of each character: its proportions, size removed."""
+    return np.log(np.array([c.array / c.height for c in characters]))
