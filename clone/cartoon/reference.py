@@ -25,12 +25,13 @@ import numpy as np
 from clone.cartoon.character import STANDARD, CharacterSpec
 from clone.demo import demo_motions
 from pose_io.measures import reference_limb_lengths, skeleton_height
+from pose_io.resample import resample_values
 from pose_io.track import PoseTrack
 from retarget.placement import Placement, place, placement_of
 from retarget.preprocess import LAYOUT
 from retarget.tracks import body15_track, to_body15
 from retarget.world.camera import Camera, facing_angle, ground_origin, project
-from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, resample, rest_pose, retarget_3d
+from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, rest_pose, retarget_3d
 
 REFERENCE_FRAMES = 192  # 6.4 s at 30 fps: the built-in reference motion's calm opening
 YAW_STEP = 5.0  # degrees between the standard body's renders a yaw estimate interpolates
@@ -141,7 +142,7 @@ def reference_track(spec: CharacterSpec, framing: Framing, fps: float, frames: i
     """
     motion = _reference_motion(frames)
     joints = _project(spec.skeleton(), framing.camera, frames)  # [T, 15, 2] driver pixels
-    joints = place(resample(joints, motion.fps, fps), framing.placement)
+    joints = place(resample_values(joints, motion.fps, fps), framing.placement)
     return body15_track(joints, fps, framing.image_size)
 
 

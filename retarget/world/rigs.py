@@ -32,6 +32,7 @@ from types import MappingProxyType
 import numpy as np
 
 from pose_io.errors import InputError
+from pose_io.resample import resample_values
 from retarget.world.mocap import MocapClip, read_asf_amc, read_bvh
 from retarget.world.skeleton import (
     WORLD_JOINTS,
@@ -40,7 +41,6 @@ from retarget.world.skeleton import (
     bone_lengths,
     joint_index,
     normalise_placement,
-    resample,
 )
 
 log = logging.getLogger(__name__)
@@ -404,7 +404,7 @@ def load_motion(
     src_fps = 1.0 / clip.frame_time
     if abs(src_fps - round(src_fps)) < 0.01:
         src_fps = float(round(src_fps))  # 0.0333333 s -> exactly 30 fps
-    world = normalise_placement(resample(world, src_fps, fps))
+    world = normalise_placement(resample_values(world, src_fps, fps))
     return Motion3D(world.astype(np.float32), float(fps), motion_name(path), str(path))
 
 

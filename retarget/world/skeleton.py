@@ -274,26 +274,6 @@ def normalise_placement(positions: np.ndarray, ground_percentile: float = 2.0) -
     return out
 
 
-def resample(positions: np.ndarray, src_fps: float, fps: float) -> np.ndarray:
-    """Linear resampling of [T, ...] frames from ``src_fps`` to ``fps``.
-
-    Integer ratios (60 -> 30, 120 -> 30) pick every k-th frame exactly.
-
-    Returns:
-        [T', ...] with ``T' = floor((T - 1) * fps / src_fps) + 1``.
-    """
-    t = positions.shape[0]
-    if abs(src_fps - fps) < 1e-6 * fps:
-        return positions.copy()
-    n = int(np.floor((t - 1) * fps / src_fps + 1e-9)) + 1
-    src = np.arange(n) * (src_fps / fps)
-    lo = np.clip(np.floor(src + 1e-9).astype(np.int64), 0, t - 1)
-    hi = np.minimum(lo + 1, t - 1)
-    w = (src - lo).reshape((-1,) + (1,) * (positions.ndim - 1))
-    w[np.abs(w) < 1e-9] = 0.0
-    return (1 - w) * positions[lo] + w * positions[hi]
-
-
 def describe(skeleton: Skeleton) -> str:
     """One line: height and main segment lengths, for logs."""
     d = skeleton.as_dict()
@@ -317,7 +297,6 @@ __all__ = [
     "describe",
     "joint_index",
     "normalise_placement",
-    "resample",
     "retarget_3d",
     "skeleton_of",
 ]

@@ -109,3 +109,11 @@ def test_resample_missing_neighbour_makes_missing():
     assert odd.num_frames == 8  # 9 frame steps at 30 fps = 0.3 s -> 7.2 steps at 24 fps
     with pytest.raises(InputError):
         resample(track, 0.0)
+
+
+def test_resample_values_on_motion_capture_arrays():
+    x = np.arange(13, dtype=np.float64)[:, None, None] * np.ones((1, 17, 3))  # [T, J, 3] like world positions
+    np.testing.assert_array_equal(resample_values(x, 120.0, 30.0)[:, 0, 0], [0, 4, 8, 12])  # frames picked exactly
+    np.testing.assert_allclose(resample_values(x, 30.0, 60.0)[:3, 0, 0], [0, 0.5, 1.0])
+    assert resample_values(x, 30.0, 30.0).shape == x.shape
+    assert resample_values(x, 119.88, 30.0).shape[0] == 4  # (13 - 1) * 30 / 119.88 = 3.003: frames 0-3

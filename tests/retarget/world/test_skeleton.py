@@ -18,7 +18,7 @@ from retarget.world import (
     sample_skeleton,
     skeleton_of,
 )
-from retarget.world.skeleton import bone_lengths, bone_vectors, resample, rest_pose
+from retarget.world.skeleton import bone_lengths, bone_vectors, rest_pose
 from tests.retarget.world.humanoid import MOTIONBUILDER, humanoid_bvh
 
 J = WORLD_JOINTS.index
@@ -146,10 +146,3 @@ def test_retarget_without_foot_fix_differs_when_proportions_change() -> None:
     fixed = retarget_3d(motion, target)
     raw = retarget_3d(motion, target, keep_feet_on_ground=False)
     assert np.abs(fixed.positions - raw.positions).max() > 1e-3
-
-
-def test_resample_picks_frames_for_integer_ratios() -> None:
-    x = np.arange(13, dtype=np.float64)[:, None]
-    np.testing.assert_array_equal(resample(x, 120.0, 30.0)[:, 0], [0, 4, 8, 12])
-    np.testing.assert_allclose(resample(x, 30.0, 60.0)[:3, 0], [0, 0.5, 1.0])
-    assert resample(x, 30.0, 30.0).shape == x.shape
