@@ -4,7 +4,7 @@
   number, in the order a report shows them) and ``Scores`` (per-frame curves, summary, details).
 - :mod:`~clone.metrics.poses`: limb error, foot skating, jitter, joints outside the image; against ground-truth
   poses the MidHip-aligned pose error (the primary measure), placement and the view check (definitions in
-  ``pose_io.measures``, shared with `clone retarget eval`); ``evaluate_track`` runs them on a track.
+  ``pose_io.compare``, shared with `clone retarget eval`); ``evaluate_track`` runs them on a track.
 - :mod:`~clone.metrics.frames`: SSIM/PSNR of generated frames against the true ones, whole and around the person.
 """
 

@@ -15,7 +15,7 @@ the methods share one scale.
   (``foot_contacts``), shared with the foot-contact cleanup of `clone drive`.
 * temporal jitter: the mean norm of the second difference ``x[t+1] - 2 x[t] + x[t-1]`` of every joint.
 * outside share: the share of present joints outside the image.
-* against ground-truth poses (``pose_io.measures``, the definitions `clone retarget eval` uses): the pose error
+* against ground-truth poses (``pose_io.compare``, the definitions `clone retarget eval` uses): the pose error
   of the MidHip-aligned poses (each frame's MidHip subtracted from both and left out) as the RMSE of the joint
   distance in % of height (the primary measure), the paper's MSE and PCK of the same; placement, the RMSE of the
   MidHip distance; and the view check, the share of frames facing the same side of the image as the truth.
@@ -29,6 +29,15 @@ from collections.abc import Iterable
 import numpy as np
 
 from clone.metrics.table import Scores, nan_mean, row_means
+from pose_io.compare import (
+    PCK_ALPHAS,
+    aligned_pose_error,
+    pck_hits,
+    pose_error_terms,
+    root_aligned,
+    root_distance,
+    same_facing,
+)
 from pose_io.errors import InputError
 from pose_io.feet import (  # one home: the cleanup honours the same contacts
     CONTACT_HEIGHT_TOL,
@@ -38,20 +47,7 @@ from pose_io.feet import (  # one home: the cleanup honours the same contacts
     foot_contacts,
 )
 from pose_io.layouts import JointLayout
-from pose_io.measures import (
-    ANKLES,
-    PCK_ALPHAS,
-    aligned_pose_error,
-    as_layout,
-    check_joints,
-    limb_lengths,
-    pck_hits,
-    pose_error_terms,
-    root_aligned,
-    root_distance,
-    same_facing,
-    skeleton_height,
-)
+from pose_io.measures import ANKLES, as_layout, check_joints, limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 
 log = logging.getLogger(__name__)
@@ -210,12 +206,12 @@ def gt_pose_scores(
         layout: joint layout of both.
 
     Returns:
-        On the MidHip-aligned poses (``pose_io.measures.root_aligned``): ``pose_rmse_pct``, the root of the mean
+        On the MidHip-aligned poses (``pose_io.compare.root_aligned``): ``pose_rmse_pct``, the root of the mean
         squared joint distance in % of height (the primary measure); ``pose_mse``, the mean over frames, joints
         and both coordinates of ``((pred - gt) / height)²`` (height² units); ``pck_<alpha>``, the share of joints
         closer than ``alpha * height``. ``root_rmse_pct``: the RMS distance of the MidHips in % of height
         (placement). ``facing_share``: the share of frames facing the same side as the truth
-        (``pose_io.measures.same_facing``). Per-frame curves of the same names.
+        (``pose_io.compare.same_facing``). Per-frame curves of the same names.
     """
     layout = as_layout(layout)
     if np.shape(pred) != np.shape(gt):

@@ -6,7 +6,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pose_io.measures import amplitude_ratio, pose_error, root_aligned
+from pose_io.compare import pose_error, root_aligned
+from pose_io.measures import amplitude_ratio
 
 METRICS: tuple[str, ...] = ("mse_x1e3", "rmse_pct", "pck_0.05", "pck_0.1", "amplitude")
 ALIGNMENTS: tuple[str, ...] = ("pose", "with_root", "placed")
@@ -46,7 +47,7 @@ def offset_aligned(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
 def case_scores(pred: np.ndarray, truth: np.ndarray, height: float) -> CaseScores:
     """:func:`pose_errors` of [T, 15, 2] body15 ``pred`` vs ``truth`` under every alignment of :data:`ALIGNMENTS`.
 
-    "pose" compares the root-aligned poses (:func:`pose_io.measures.root_aligned`, MidHip subtracted and left
+    "pose" compares the root-aligned poses (:func:`pose_io.compare.root_aligned`, MidHip subtracted and left
     out), the same definition as the primary pose row of ``clone report``.
     """
     return {

@@ -16,7 +16,8 @@ import torch
 
 from pose_io import InputError
 from pose_io.clean import smooth_joints
-from pose_io.measures import pose_error, reference_limb_lengths, skeleton_height
+from pose_io.compare import pose_error
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.baselines import global_scale_retarget

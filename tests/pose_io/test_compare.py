@@ -1,4 +1,4 @@
-"""pose_io.measures: the root-aligned pose error, the placement error and the facing check."""
+"""pose_io.compare: the pose error and PCK, the root-aligned pose error, the placement error and the facing check."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pose_io import BODY15, BODY25, InputError
-from pose_io import measures as m
+from pose_io import compare as m
 from tests.pose_io.test_measures import HEIGHT, J, stand
 
 
@@ -71,3 +71,45 @@ def test_facing_offset_and_same_facing():
     np.testing.assert_array_equal(m.same_facing(pred * 3.0, truth, 3 * HEIGHT, HEIGHT)[:3], [1.0, 0.0, 1.0])
     with pytest.raises(InputError, match="frames"):
         m.same_facing(_facing([0.1]), truth, HEIGHT, HEIGHT)
+
+
+
+def test_pose_error_known_values():
+    truth = stand(4)
+    pred = truth.copy()
+    pred[:, J("nose"), 0] += 0.08 * HEIGHT  # one joint of 15 off by 8 % of the height
+    err = m.pose_error(pred, truth, HEIGHT)
+    assert set(err) == {"mse", "rmse_pct", "pck_0.05", "pck_0.1"}
+    assert err["mse"] == pytest.approx(0.08**2 / 30)  # over frames, joints and both coordinates
+    assert err["rmse_pct"] == pytest.approx(np.sqrt(0.08**2 / 15) * 100)
+    assert err["pck_0.05"] == pytest.approx(14 / 15) and err["pck_0.1"] == 1.0
+    assert m.pose_error(truth, truth, HEIGHT) == {"mse": 0.0, "rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0}
+
+
+def test_pose_error_leaves_missing_joints_out():
+    truth = stand(2)
+    pred = truth.copy()
+    pred[:, J("nose")] = np.nan
+    truth[0, J("neck")] = np.nan
+    assert m.pose_error(pred, truth, HEIGHT) == {"mse": 0.0, "rmse_pct": 0.0, "pck_0.05": 1.0, "pck_0.1": 1.0}
+    nothing = np.full_like(truth, np.nan)
+    assert np.isnan(m.pose_error(nothing, truth, HEIGHT)["mse"])
+
+
+def test_pck_counts_strictly_closer():
+    hits = m.pck_hits(np.array([0.0, 0.05, 0.0499, np.nan]), 0.05)
+    np.testing.assert_array_equal(hits[:3], [1.0, 0.0, 1.0])
+    assert np.isnan(hits[3])
+
+
+def test_pose_error_terms_shapes_and_errors():
+    squared, distance = m.pose_error_terms(stand(3) + [3.0, 4.0], stand(3), 10.0)
+    assert squared.shape == (3, 30) and distance.shape == (3, 15)
+    np.testing.assert_allclose(distance, 0.5)
+    np.testing.assert_allclose(squared.reshape(3, 15, 2), np.broadcast_to([0.09, 0.16], (3, 15, 2)))
+    with pytest.raises(InputError, match="does not match"):
+        m.pose_error_terms(stand(3), stand(4), 10.0)
+    with pytest.raises(InputError, match="height must be positive"):
+        m.pose_error_terms(stand(3), stand(3), 0.0)
+    with pytest.raises(InputError, match="height must be positive"):
+        m.pose_error_terms(stand(3), stand(3), float("nan"))
