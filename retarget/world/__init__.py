@@ -23,7 +23,8 @@ from retarget.world.camera import (
 from retarget.world.characters import NAMED_CHARACTERS, make_skeleton, sample_skeleton
 from retarget.world.config import default_cache_dir
 from retarget.world.dataset import MotionWorld
-from retarget.world.rigs import RIGS, load_motion
+from retarget.world.rig_names import RIGS
+from retarget.world.rigs import load_motion
 from retarget.world.skeleton import (
     BONES,
     WORLD_JOINTS,
