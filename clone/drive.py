@@ -109,7 +109,7 @@ def load_driving_retargeter(
     """The retargeting network for driving: ``refine_steps`` motion-code refinement steps (None: inference's
     default); with 0, the numpy backend when the weights have an up-to-date export (nothing to refine there)."""
     from retarget.api import load_retargeter
-    from retarget.inference import InferenceConfig
+    from retarget.inference_config import InferenceConfig
 
     config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
     return load_retargeter(weights, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")

@@ -30,7 +30,8 @@ import numpy as np
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.inference import InferenceConfig, PreparedMotion, ReferenceCodes, RetargeterBase
+from retarget.inference import RetargeterBase
+from retarget.inference_config import InferenceConfig, PreparedMotion, ReferenceCodes
 from retarget.preprocess import NormStats, PreprocessConfig
 
 if TYPE_CHECKING:

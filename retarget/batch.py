@@ -20,7 +20,8 @@ from pose_io.errors import InputError
 from pose_io.readers import TRACK_SUFFIXES, is_openpose_folder
 from pose_io.track import PoseTrack
 from pose_io.writers import write_track
-from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
+from retarget.inference import RetargeterBase
+from retarget.inference_config import PreparedMotion, ReferenceCodes
 
 log = logging.getLogger(__name__)
 

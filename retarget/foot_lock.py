@@ -14,7 +14,8 @@ import numpy as np
 
 from pose_io.feet import DEFAULT_FOOT_LOCK, FootLockConfig, foot_lock, track_contacts
 from pose_io.track import PoseTrack
-from retarget.inference import PreparedMotion, ReferenceCodes, RetargeterBase
+from retarget.inference import RetargeterBase
+from retarget.inference_config import PreparedMotion, ReferenceCodes
 
 
 @dataclass(frozen=True, eq=False)

@@ -11,7 +11,7 @@ The driver's own skeleton and view codes are the mean over windows of the traini
 skeleton code is (:meth:`RetargeterBase.reference_codes`), not one pool over a long window; its view code too is
 the mean here (the reference's view pooling was chosen after this refinement, with it as it is). A pull towards the encoder's
 code (``anchor``) keeps the refined code where the decoder was trained. The settings are
-:class:`retarget.inference.InferenceConfig`'s ``refine_*``.
+:class:`retarget.inference_config.InferenceConfig`'s ``refine_*``.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from clone.cli.common import (
 )
 from clone.cli.retarget_cloning import eval_cloning
 from clone.cli.retarget_train import train
-from retarget.inference import REFINE_STEPS  # numpy and pose_io only, which the command line loads anyway
+from retarget.inference_config import REFINE_STEPS  # numpy and pose_io only: light for the command line
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -167,7 +167,7 @@ def _retargeter(
     torch's otherwise)."""
     from retarget.api import NumpyRetargeter, load_retargeter
     from retarget.blas import set_blas_threads
-    from retarget.inference import InferenceConfig
+    from retarget.inference_config import InferenceConfig
     from retarget.runtime import free_cores
 
     config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)

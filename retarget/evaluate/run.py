@@ -58,7 +58,7 @@ def network_method(
     network as its encoders give the codes, as the authors released their models).
     """
     from retarget.api import load_retargeter
-    from retarget.inference import InferenceConfig
+    from retarget.inference_config import InferenceConfig
 
     config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
     net = load_retargeter(weights, device=device, config=config, backend="torch")

@@ -27,7 +27,7 @@ from pose_io.measures import skeleton_height
 from pose_io.resample import resample
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
-from retarget.inference import NETWORK_FPS
+from retarget.inference_config import NETWORK_FPS
 from retarget.preprocess import LAYOUT, LOCAL_INDEX, ROOT_INDEX, PreprocessConfig
 from retarget.tracks import prepare_track
 

@@ -15,7 +15,7 @@ from pose_io.errors import InputError
 from pose_io.readers import read_track
 from pose_io.writers import write_track
 from retarget.api import ReferenceCodes, load_retargeter
-from retarget.inference import InferenceConfig
+from retarget.inference_config import InferenceConfig
 from tests.clone.train_ref.helpers import (  # noqa: F401 (_restore_threads is an autouse fixture)
     _restore_threads,
     figure_track,
