@@ -8,9 +8,9 @@ does. On the 256² demo model (1 thread) it ran 1.96x the fp32 session (80 again
 0.0028-0.0030 SSIM against the ground truth of the three held-out pairs (README, "Cloning on a laptop").
 
 Quantising takes about 3 s, so the result is cached under ``~/.cache/clone2d/generators/``, keyed by a hash of
-everything that decides it (:func:`cache_key`). A cache file that does not read back is rebuilt; a failed
-quantisation, or one whose frames stray from fp32's on the calibration frames, falls back to the fp32 session
-with a warning: driving never fails for it.
+everything that decides it (:func:`cache_key`); the most recently used models up to ``MAX_CACHE_BYTES`` are kept.
+A cache file that does not read back is rebuilt; a failed quantisation, or one whose frames stray from fp32's on
+the calibration frames, falls back to the fp32 session with a warning: driving never fails for it.
 """
 
 from __future__ import annotations
@@ -38,6 +38,9 @@ log = logging.getLogger(__name__)
 CACHE_FORMAT = 1  # bump when the file layout or what enters the key changes
 MAGIC = b"clone2d-int8\n"  # then the payload's SHA-256 (32 bytes), then the ONNX model
 MIN_FREE_FACTOR = 10  # cache only with this many times the file's size free on the disk
+# The cache keeps its most recently used models up to this many bytes (every trained model adds one: about 3 MB
+# at 256²); the least recently used are deleted when a new one is written.
+MAX_CACHE_BYTES = 256 * 2**20
 
 
 @dataclass(frozen=True)
@@ -171,8 +174,48 @@ def write_cached(path: Path, model: bytes) -> None:
             return
         with atomic_file(path) as tmp:
             tmp.write_bytes(MAGIC + hashlib.sha256(model).digest() + model)
+        prune_cache(path.parent, keep=path, max_bytes=MAX_CACHE_BYTES)
     except OSError as exc:
         log.warning("not caching the int8 generator in %s (%s)", path.parent, exc)
+
+
+def _mark_used(path: Path) -> None:
+    """Move a cache file's modification time to now: :func:`prune_cache` deletes the least recently used."""
+    try:
+        os.utime(path)
+    except OSError as exc:  # a read-only cache still serves its models
+        log.debug("cannot mark %s as used (%s)", path, exc)
+
+
+def prune_cache(folder: Path, keep: Path, max_bytes: int = MAX_CACHE_BYTES) -> list[Path]:
+    """Delete the least recently used ``*.int8.onnx`` in ``folder`` until the rest fit in ``max_bytes``.
+
+    ``keep`` (the model just written) always stays, whatever its size; other files are left alone.
+
+    Returns:
+        The deleted files.
+    """
+    entries = []
+    for file in folder.glob("*.int8.onnx"):
+        try:
+            stat = file.stat()
+        except OSError:  # deleted meanwhile by another drive
+            continue
+        entries.append((file == keep, stat.st_mtime_ns, stat.st_size, file))
+    entries.sort(key=lambda e: (e[0], e[1]), reverse=True)  # the kept file, then the newest first
+    total, deleted = 0, []
+    for is_kept, _, size, file in entries:
+        total += size
+        if total > max_bytes and not is_kept:
+            try:
+                file.unlink()
+                deleted.append(file)
+            except OSError as exc:
+                log.debug("cannot delete %s from the cache (%s)", file, exc)
+    if deleted:
+        log.info("int8 cache: deleted %d least recently used model(s) to stay under %d MB", len(deleted),
+                 max_bytes // 2**20)
+    return deleted
 
 
 def build_int8_generator(model: ReferenceModel, threads: int | None = None, cache_dir: Path | None = None,
@@ -195,6 +238,7 @@ def build_int8_generator(model: ReferenceModel, threads: int | None = None, cach
         try:
             generator = OnnxGenerator.from_onnx(cached, with_plate, threads, precision="int8")
             log.info("int8 generator from the cache: %s", path)
+            _mark_used(path)
             return generator
         except Exception as exc:  # noqa: BLE001 - any unreadable model is rebuilt
             log.warning("the cached int8 generator %s does not load (%s); rebuilding it", path, exc)

@@ -82,14 +82,41 @@ def test_second_build_reuses_the_cache_and_leaves_no_temp_files(model, tmp_path,
     build_int8_generator(model, threads=1, cache_dir=cache, config=FAST)
     [entry] = cache.iterdir()
     assert entry.name == f"{cache_key(model, FAST)}.int8.onnx" and list(temp.iterdir()) == []
-    stamp = entry.stat().st_mtime_ns
+    stamp, content = entry.stat(), entry.read_bytes()
+    os.utime(entry, ns=(stamp.st_atime_ns, stamp.st_mtime_ns - 10**9))  # used a second ago
 
     def no_quantising(*args, **kwargs):
         raise AssertionError("quantised again")
 
     monkeypatch.setattr(int8_generator, "quantize", no_quantising)
     again = build_int8_generator(model, threads=1, cache_dir=cache, config=FAST)
-    assert quantised(again) and list(cache.iterdir()) == [entry] and entry.stat().st_mtime_ns == stamp
+    assert quantised(again) and list(cache.iterdir()) == [entry] and entry.read_bytes() == content
+    assert entry.stat().st_ino == stamp.st_ino and entry.stat().st_mtime_ns > stamp.st_mtime_ns - 10**9  # marked used
+
+
+def test_the_cache_keeps_the_most_recently_used_models_within_its_budget(tmp_path):
+    for age, name in enumerate(("new", "mid", "old", "oldest")):
+        path = tmp_path / f"{name}.int8.onnx"
+        path.write_bytes(bytes(100))
+        os.utime(path, ns=(0, 10**12 - age * 10**9))
+    other = tmp_path / "notes.txt"
+    other.write_bytes(bytes(1000))
+    keep = tmp_path / "oldest.int8.onnx"  # the one just written stays even though it is the oldest here
+    deleted = int8_generator.prune_cache(tmp_path, keep, max_bytes=250)
+    assert sorted(p.name for p in deleted) == ["mid.int8.onnx", "old.int8.onnx"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new.int8.onnx", "notes.txt", "oldest.int8.onnx"]
+    assert int8_generator.prune_cache(tmp_path, keep, max_bytes=250) == []  # within budget now
+
+
+def test_writing_a_model_prunes_the_cache(model, tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    stale = cache / "stale.int8.onnx"
+    stale.write_bytes(bytes(10))
+    os.utime(stale, ns=(0, 0))
+    monkeypatch.setattr(int8_generator, "MAX_CACHE_BYTES", 1)
+    build_int8_generator(model, threads=1, cache_dir=cache, config=FAST)
+    assert [p.name for p in cache.iterdir()] == [f"{cache_key(model, FAST)}.int8.onnx"]
 
 
 def test_the_key_follows_what_decides_the_result(model):
