@@ -94,3 +94,50 @@ def build(
                f"pitch +-{summary['pitch_range_deg']:g} deg")
     typer.echo(f"built in {summary['build_seconds']:.1f} s; this run took {elapsed:.1f} s")
     typer.echo(f"cache: {summary['cache']}")
+
+
+CacheOption = Annotated[Path | None, typer.Option("--cache", help="Cache folder (default: ~/.cache/clone2d/world).")]
+
+
+def _describe(world: object) -> str:
+    """One line of settings: characters per split (extra ones with their spread), seed, frame rate, window."""
+    c = world.config
+    if not world.finished:
+        return "unfinished build"
+    extra = c.get("extra_train_characters", 0)
+    train = f"{c.get('n_train_characters')}" + (f"+{extra} at spread {c.get('extra_spread', 1.0):g}" if extra else "")
+    return (f"characters {train} / {c.get('n_val_characters')} / {c.get('n_test_characters')}, seed {c.get('seed')}, "
+            f"{c.get('fps', 0):g} fps, window {c.get('window')}")
+
+
+@world_app.command("list")
+@user_errors
+def list_worlds(cache: CacheOption = None) -> None:
+    """List the cached worlds, most recently used first, with their size and settings."""
+    from retarget.world.cache import cached_worlds
+
+    worlds = cached_worlds(cache)
+    for w in worlds:
+        used = time.strftime("%Y-%m-%d %H:%M", time.localtime(w.last_used))
+        typer.echo(f"{w.path.name}  {w.bytes / 1e9:6.2f} GB  used {used}  {_describe(w)}")
+    typer.echo(f"{len(worlds)} world(s), {sum(w.bytes for w in worlds) / 1e9:.2f} GB")
+
+
+@world_app.command("clean")
+@user_errors
+def clean(
+    cache: CacheOption = None,
+    keep: Annotated[int, typer.Option("--keep", min=0, max=1000, help="Most recently used worlds kept.")] = 1,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Only say what would be removed.")] = False,
+) -> None:
+    """Remove all cached worlds but the --keep most recently used (and builds that never finished, after a day).
+
+    A removed world is rebuilt from the mocap the next time training asks for it (minutes).
+    """
+    from retarget.world.cache import cached_worlds, remove_worlds, stale_worlds
+
+    stale = stale_worlds(cached_worlds(cache), keep)
+    for w in stale:
+        typer.echo(f"{'would remove' if dry_run else 'removing'} {w.path} ({w.bytes / 1e9:.2f} GB; {_describe(w)})")
+    freed = sum(w.bytes for w in stale) if dry_run else remove_worlds(stale)
+    typer.echo(f"{'would free' if dry_run else 'freed'} {freed / 1e9:.2f} GB ({len(stale)} world(s))")

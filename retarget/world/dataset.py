@@ -25,6 +25,7 @@ from pathlib import Path
 from pose_io.atomic import atomic_dir
 from pose_io.errors import InputError
 from retarget.world.build import find_mocap_files, write_world
+from retarget.world.cache import mark_used
 from retarget.world.camera import CANVAS_SIZE
 from retarget.world.config import SPLITS, WORLD_VERSION, WorldConfig, default_cache_dir
 from retarget.world.split import WorldSplit
@@ -122,6 +123,7 @@ class MotionWorld:
             try:
                 world = cls(folder)
                 log.info("motion world from cache %s", folder)
+                mark_used(folder)  # `clone world clean` removes the least recently used first
                 return world
             except InputError as exc:
                 log.warning("%s; rebuilding", exc)

@@ -294,6 +294,10 @@ add("world build empty mocap", WORLD, [b.mocap_empty])
 add("world build missing mocap", ["world", "build", "--mocap", "{t}/nomocap", "--cache", "{t}/cache"])
 paths("world build", WORLD[:4], [b.mocap_empty, *EVERY_OUTPUT], "--cache",
       ["{t}/old.npz", "{t}/blocker/c", "/proc/c"])
+for verb in ("list", "clean"):
+    paths(f"world {verb}", ["world", verb], [*EVERY_OUTPUT], "--cache", ["{t}/nowhere", "{t}/old.npz"])
+options("world clean", ["world", "clean", "--cache", "{t}/olddir"], [*EVERY_OUTPUT],
+        {"--keep": ["-1", "nan", "99999999999"]})
 
 # ------------------------------------------------------------------------------------------------ search
 
