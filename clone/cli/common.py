@@ -94,6 +94,7 @@ def setup_logging(verbose: bool) -> None:
 # --device is free text (cuda:N), not a choice: resolve_device_option checks it.
 DEVICE_HELP = "auto | cpu | cuda | cuda:N"
 MAX_THREADS = 1024  # --threads of every command
+MAX_CLIP_FRAMES = 100_000  # frames of a case or clip a retarget command generates (eval, eval-cloning, interpolate)
 
 # Options several commands that read the motion world or compare checkpoints share.
 CompareOption = Annotated[

@@ -14,6 +14,7 @@ import typer
 from clone.cli.choices import Split
 from clone.cli.common import (
     DEVICE_HELP,
+    MAX_CLIP_FRAMES,
     MAX_THREADS,
     CompareOption,
     WorldCacheOption,
@@ -24,7 +25,6 @@ from clone.cli.common import (
 )
 
 MAX_CLIPS = 100_000
-MAX_FRAMES = 100_000
 
 
 @user_errors
@@ -65,7 +65,7 @@ def eval_cloning(
 
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
     check_number("--clips", clips, 1, MAX_CLIPS)
-    check_number("--frames", frames, 16, MAX_FRAMES)
+    check_number("--frames", frames, 16, MAX_CLIP_FRAMES)
     check_number("--threads", threads, 1, MAX_THREADS)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
