@@ -279,7 +279,7 @@ def drive(
         What was written.
     """
     from clone.onnx_generator import generator_runtime
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
     from pose_io.writers import write_track
 
     t0 = time.perf_counter()

@@ -40,7 +40,7 @@ def test_api_script(openpose_examples, tmp_path):
 def _synthetic_video(path: Path, role: str, character: str, yaw: float, frames: int) -> None:
     from clone.demo import demo_motions
     from clone.synth import get_character, render_performance
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
 
     skeleton, look, _ = get_character(character)
     images, _track, _meta = render_performance(demo_motions()[role], skeleton, look, yaw=yaw, size=160,

@@ -57,7 +57,7 @@ def cartoon_command(
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
     from pose_io.writers import write_track
     from retarget.runtime import configure_threads
 

@@ -129,7 +129,8 @@ def show(
 ) -> None:
     """Draw the skeleton over black or over the --frames video/folder into an H.264 mp4."""
     from clone.outputs import check_number, check_output
-    from pose_io.video import read_frames, write_pose_video
+    from pose_io.video import read_frames
+    from pose_io.video_out import write_pose_video
 
     check_output(out, "--out", suffixes=(".mp4",), overwrite=overwrite)
     check_number("--in-fps", in_fps, 0, MAX_FPS, low_open=True)

@@ -130,7 +130,7 @@ def apply(
     write_track(result, out, overwrite=overwrite)
     console.print(f"wrote {out} ({len(result)} frames, body15, {result.image_size[0]}x{result.image_size[1]})")
     if preview is not None:
-        from pose_io.video import write_pose_video
+        from pose_io.video_out import write_pose_video
 
         write_pose_video(result, preview, overwrite=overwrite)
         console.print(f"wrote {preview}")
@@ -228,7 +228,7 @@ def interpolate(
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.readers import parse_size, read_track
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
     from retarget.api import load_retargeter
     from retarget.interpolate import CANVASES, grid_frames, interpolate_grid, parse_vary
     from retarget.runtime import configure_threads

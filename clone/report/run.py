@@ -124,7 +124,7 @@ def _write_video(
         progress: called with (frames done, total) after every frame.
     """
     from clone.generate import generate_frames
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
 
     height = _panel_height(model.canvas.size)
     labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)]

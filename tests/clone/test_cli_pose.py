@@ -6,7 +6,8 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from pose_io import read_track, write_track
-from pose_io.video import VideoWriter, read_frames
+from pose_io.video import read_frames
+from pose_io.video_out import VideoWriter
 
 runner = CliRunner()
 

@@ -211,7 +211,7 @@ def test_a_failing_stage_ends_drive_with_its_error_and_leaves_nothing(trained, d
     """Drawing and encoding run in threads beside the generator: their errors still reach the caller, the
     unfinished video is removed and no thread is left running."""
     import clone.drive as drive_module
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
 
     calls = []
 

@@ -5,7 +5,8 @@ import pytest
 
 from pose_io import InputError, read_track
 from pose_io.extract import INSTALL_HINT, extract_video, load_mediapipe_pose
-from pose_io.video import VideoWriter, read_frames
+from pose_io.video import read_frames
+from pose_io.video_out import VideoWriter
 
 
 def mediapipe_available() -> bool:

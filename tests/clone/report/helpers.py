@@ -69,7 +69,7 @@ def make_methods(
 
 def write_video(path: Path, frames: int = 12) -> Path:
     """A two-panel side-by-side mp4 of the walking figure."""
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
 
     with VideoWriter(path, fps=30) as video:
         for j in walk(frames).joints:

@@ -20,7 +20,7 @@ from tests.clone.train_ref.helpers import (
 
 
 def test_video_reference_uses_the_video_fps(tmp_path):
-    from pose_io.video import VideoWriter
+    from pose_io.video_out import VideoWriter
 
     track = figure_track(20, width=96, height=72, fps=25.0)
     poses = write_track(track.replace(fps=10.0), tmp_path / "poses.npz")
