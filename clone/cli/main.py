@@ -63,6 +63,9 @@ app.add_typer(synth_app, name="synth")
 app.add_typer(search_app, name="search")
 
 
+_terminated_by: list[int] = []  # the signal _terminate handled, if any
+
+
 def _terminate(signum: int, frame: object) -> None:
     """SIGTERM ends the command as Ctrl-C does: unwinding, so every atomic writer's ``finally`` removes its temp file.
 
@@ -70,6 +73,7 @@ def _terminate(signum: int, frame: object) -> None:
     """
     import signal
 
+    _terminated_by.append(signum)
     signal.signal(signum, signal.SIG_DFL)
     raise SystemExit(128 + signum)
 
@@ -97,4 +101,11 @@ def main() -> None:
     _quiet_library_warnings()
     if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None):
         signal.signal(signal.SIGTERM, _terminate)
-    app()
+    try:
+        app()
+    except BaseException:
+        # The signal's SystemExit may surface as another exception: raised inside an extension module's
+        # import (onnxruntime's becomes "ImportError: initialization failed"), it is the import that fails.
+        if _terminated_by:
+            raise SystemExit(128 + _terminated_by[0]) from None
+        raise
