@@ -100,6 +100,11 @@ MAX_CLIP_FRAMES = 100_000  # frames of a case or clip a retarget command generat
 CompareOption = Annotated[
     list[str] | None, typer.Option("--compare", help="Another checkpoint as NAME=PATH (repeatable).")
 ]
+# --mocap and --weights of the commands that build the motion world and score our network on it.
+MocapOption = Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")]
+OurWeightsOption = Annotated[
+    Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights).")
+]
 WorldSeedOption = Annotated[
     int, typer.Option("--world-seed", help="Seed of the world (its split and characters); training's --seed.")
 ]

@@ -17,6 +17,8 @@ from clone.cli.common import (
     MAX_CLIP_FRAMES,
     MAX_THREADS,
     CompareOption,
+    MocapOption,
+    OurWeightsOption,
     WorldCacheOption,
     WorldSeedOption,
     console,
@@ -29,11 +31,9 @@ MAX_CLIPS = 100_000
 
 @user_errors
 def eval_cloning(
-    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the world is built from.")],
+    mocap: MocapOption,
     out: Annotated[Path, typer.Option("--out", help="Folder to write: cloning.json, cloning.md.")],
-    weights: Annotated[
-        Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights).")
-    ] = None,
+    weights: OurWeightsOption = None,
     compare: CompareOption = None,
     split: Annotated[
         Split, typer.Option("--split", parser=Split, help="World split whose clips drive (tune on val).")

@@ -18,6 +18,8 @@ from clone.cli.common import (
     MAX_REFINE_STEPS,
     MAX_THREADS,
     CompareOption,
+    MocapOption,
+    OurWeightsOption,
     WorldCacheOption,
     WorldSeedOption,
     console,
@@ -34,11 +36,9 @@ MAX_PROBE_STEPS = 1_000_000
 
 @user_errors
 def evaluate(
-    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")],
+    mocap: MocapOption,
     out: Annotated[Path, typer.Option("--out", help="Folder to write: eval.json, eval.md, codes_*.png.")],
-    weights: Annotated[
-        Path | None, typer.Option("--weights", help="Our checkpoint (default: the shipped weights, if any).")
-    ] = None,
+    weights: OurWeightsOption = None,
     compare: CompareOption = None,
     official: Annotated[
         Path | None,

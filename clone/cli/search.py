@@ -13,6 +13,7 @@ import typer
 
 from clone.cli.common import (
     DEVICE_HELP,
+    MocapOption,
     WorldCacheOption,
     WorldSeedOption,
     console,
@@ -124,7 +125,7 @@ def query(
 @search_app.command("eval")
 @user_errors
 def evaluate(
-    mocap: Annotated[Path, typer.Option("--mocap", help="Motion-capture folder the motion world is built from.")],
+    mocap: MocapOption,
     queries: Annotated[int, typer.Option("--queries", min=1, help="Queries (random test windows).")] = 500,
     length: Annotated[int, typer.Option("--length", min=16, help="Frames per query.")] = 64,
     min_view_gap: Annotated[
