@@ -21,7 +21,7 @@ from torch import nn
 from pose_io.errors import InputError
 from retarget.evaluate.codes import code_grid, grid_inputs, mean_and_error, silhouette
 from retarget.evaluate.config import EvalConfig
-from retarget.world.characters import log_proportions
+from retarget.world.characters import standard_proportions
 from retarget.world.split import WorldSplit
 
 _CHUNK = 2000  # windows prepared at a time
@@ -95,13 +95,9 @@ def train_probe(
         grid_inputs(net, train, np.stack([motions[i:i + _CHUNK], characters[i:i + _CHUNK], views[i:i + _CHUNK]], 1), fps)
         for i in range(0, config.samples, _CHUNK)
     ]).cpu()  # fmt: skip
-    target = log_proportions(train.characters)
-    mean, std = target.mean(axis=0), target.std(axis=0) + 1e-9
-    y = torch.from_numpy((target - mean) / std).float()[torch.from_numpy(characters)]
+    y = torch.from_numpy(standard_proportions(train.characters)).float()[torch.from_numpy(characters)]
     torch.manual_seed(config.seed)
     probe = ProportionProbe(y.shape[1])
-    probe.register_buffer("target_mean", torch.from_numpy(mean))
-    probe.register_buffer("target_std", torch.from_numpy(std))
     optimiser = torch.optim.Adam(probe.parameters(), lr=config.rate)
     generator = torch.Generator().manual_seed(config.seed)
     for _ in range(config.steps):

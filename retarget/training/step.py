@@ -128,10 +128,9 @@ class TrainLoss(nn.Module):
 
 def character_proportions(split) -> torch.Tensor:  # split: retarget.world.split.WorldSplit
     """[C, bones] float32: the split's characters' log(bone length / skeleton height), standardised over them."""
-    from retarget.world.characters import log_proportions
+    from retarget.world.characters import standard_proportions
 
-    logs = log_proportions(split.characters)
-    return torch.from_numpy((logs - logs.mean(axis=0)) / (logs.std(axis=0) + 1e-9)).float()
+    return torch.from_numpy(standard_proportions(split.characters)).float()
 
 
 def train_step(

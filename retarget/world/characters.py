@@ -110,9 +110,19 @@ NAMED_CHARACTERS: dict[str, Skeleton] = {
 }
 
 
-__all__ = ["MAX_HEIGHT", "MIN_HEIGHT", "NAMED_CHARACTERS", "make_skeleton", "sample_skeleton"]
-
-
 def log_proportions(characters: Sequence[Skeleton]) -> np.ndarray:
     """[C, bones] log(bone length / skeleton height) of each character: its proportions, size removed."""
     return np.log(np.array([c.array / c.height for c in characters]))
+
+
+def standard_proportions(characters: Sequence[Skeleton]) -> np.ndarray:
+    """[C, bones] :func:`log_proportions` standardised over these characters (each bone: mean 0, std 1): what
+    the skeleton-proportion term and the proportion probe compare codes with."""
+    logs = log_proportions(characters)
+    return (logs - logs.mean(axis=0)) / (logs.std(axis=0) + 1e-9)
+
+
+__all__ = [
+    "MAX_HEIGHT", "MIN_HEIGHT", "NAMED_CHARACTERS", "log_proportions", "make_skeleton", "sample_skeleton",
+    "standard_proportions",
+]
