@@ -31,7 +31,7 @@ from clone.networks import generator_input
 from clone.onnx_generator import OnnxGenerator
 from clone.reference_model import ReferenceModel
 from clone.tensors import to_tensor
-from pose_io.atomic import atomic_file
+from pose_io.atomic import atomic_file, mark_used
 
 log = logging.getLogger(__name__)
 
@@ -179,14 +179,6 @@ def write_cached(path: Path, model: bytes) -> None:
         log.warning("not caching the int8 generator in %s (%s)", path.parent, exc)
 
 
-def _mark_used(path: Path) -> None:
-    """Move a cache file's modification time to now: :func:`prune_cache` deletes the least recently used."""
-    try:
-        os.utime(path)
-    except OSError as exc:  # a read-only cache still serves its models
-        log.debug("cannot mark %s as used (%s)", path, exc)
-
-
 def prune_cache(folder: Path, keep: Path, max_bytes: int = MAX_CACHE_BYTES) -> list[Path]:
     """Delete the least recently used ``*.int8.onnx`` in ``folder`` until the rest fit in ``max_bytes``.
 
@@ -238,7 +230,7 @@ def build_int8_generator(model: ReferenceModel, threads: int | None = None, cach
         try:
             generator = OnnxGenerator.from_onnx(cached, with_plate, threads, precision="int8")
             log.info("int8 generator from the cache: %s", path)
-            _mark_used(path)
+            mark_used(path)  # prune_cache deletes the least recently used
             return generator
         except Exception as exc:  # noqa: BLE001 - any unreadable model is rebuilt
             log.warning("the cached int8 generator %s does not load (%s); rebuilding it", path, exc)

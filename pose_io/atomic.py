@@ -6,6 +6,7 @@ Used by every writer in the project. Nothing the user had is replaced unless the
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import shutil
 import tempfile
@@ -13,6 +14,17 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from pose_io.errors import InputError
+
+log = logging.getLogger(__name__)
+
+
+def mark_used(path: Path) -> None:
+    """Move a cache entry's (file or folder) modification time to now, so caches that drop the least recently
+    used keep it; a read-only cache is still used as it is."""
+    try:
+        os.utime(path)
+    except OSError as exc:
+        log.debug("cannot mark %s as used (%s)", path, exc)
 
 
 def _umask(probe_dir: Path) -> int:

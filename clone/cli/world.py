@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from clone.cli.common import console, user_errors
+from clone.cli.common import WorldCacheOption, console, user_errors
+
+if TYPE_CHECKING:
+    from retarget.world.cache import CachedWorld
 
 world_app = typer.Typer(no_args_is_help=True, help="Build and inspect the motion world used for training.")
 
@@ -19,9 +22,7 @@ def build(
     mocap: Annotated[
         Path, typer.Option("--mocap", help="Folder of .bvh / .bvh.gz / .amc files (searched recursively).")
     ],
-    cache: Annotated[
-        Path | None, typer.Option("--cache", help="Cache folder (default: ~/.cache/clone2d/world).")
-    ] = None,
+    cache: WorldCacheOption = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the motion split and the characters.")] = 0,
     fps: Annotated[float, typer.Option("--fps", help="Frame rate every clip is resampled to.")] = 30.0,
     train_characters: Annotated[
@@ -96,10 +97,7 @@ def build(
     typer.echo(f"cache: {summary['cache']}")
 
 
-CacheOption = Annotated[Path | None, typer.Option("--cache", help="Cache folder (default: ~/.cache/clone2d/world).")]
-
-
-def _describe(world: object) -> str:
+def _describe(world: CachedWorld) -> str:
     """One line of settings: characters per split (extra ones with their spread), seed, frame rate, window."""
     c = world.config
     if not world.finished:
@@ -112,7 +110,7 @@ def _describe(world: object) -> str:
 
 @world_app.command("list")
 @user_errors
-def list_worlds(cache: CacheOption = None) -> None:
+def list_worlds(cache: WorldCacheOption = None) -> None:
     """List the cached worlds, most recently used first, with their size and settings."""
     from retarget.world.cache import cached_worlds
 
@@ -126,7 +124,7 @@ def list_worlds(cache: CacheOption = None) -> None:
 @world_app.command("clean")
 @user_errors
 def clean(
-    cache: CacheOption = None,
+    cache: WorldCacheOption = None,
     keep: Annotated[int, typer.Option("--keep", min=0, max=1000, help="Most recently used worlds kept.")] = 1,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Only say what would be removed.")] = False,
 ) -> None:

@@ -2,7 +2,7 @@
 
 Every distinct set of world settings (characters, their spread, seed, frame rate, window) is a folder of its own
 (``world-<key>``, :mod:`retarget.world.dataset`), a few GB with hundreds of extra characters, and nothing deleted
-them. ``MotionWorld.build`` marks a folder used when it opens it from the cache, so the worlds a user still trains
+them. ``MotionWorld.build`` marks a folder used (``pose_io.atomic.mark_used``) when it opens it from the cache, so the worlds a user still trains
 on stay and old experiments go first.
 """
 
@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import re
 import shutil
 import time
@@ -48,14 +47,6 @@ class CachedWorld:
     last_used: float
     config: dict[str, Any]
     finished: bool = True
-
-
-def mark_used(folder: Path) -> None:
-    """Move a world folder's modification time to now (a read-only cache is still used as it is)."""
-    try:
-        os.utime(folder)
-    except OSError as exc:
-        log.debug("cannot mark %s as used (%s)", folder, exc)
 
 
 def _folder_bytes(folder: Path) -> int:
@@ -124,4 +115,4 @@ def remove_worlds(worlds: Iterable[CachedWorld]) -> int:
     return freed
 
 
-__all__ = ["UNFINISHED_AGE_S", "CachedWorld", "cached_worlds", "mark_used", "remove_worlds", "stale_worlds"]
+__all__ = ["UNFINISHED_AGE_S", "CachedWorld", "cached_worlds", "remove_worlds", "stale_worlds"]

@@ -22,10 +22,9 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
-from pose_io.atomic import atomic_dir
+from pose_io.atomic import atomic_dir, mark_used
 from pose_io.errors import InputError
 from retarget.world.build import find_mocap_files, write_world
-from retarget.world.cache import mark_used
 from retarget.world.camera import CANVAS_SIZE
 from retarget.world.config import SPLITS, WORLD_VERSION, WorldConfig, default_cache_dir
 from retarget.world.split import WorldSplit
