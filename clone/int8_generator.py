@@ -32,6 +32,7 @@ from clone.onnx_generator import OnnxGenerator
 from clone.reference_model import ReferenceModel
 from clone.tensors import to_tensor
 from pose_io.atomic import atomic_file, mark_used
+from pose_io.errors import raise_if_interrupted
 
 log = logging.getLogger(__name__)
 
@@ -233,6 +234,7 @@ def build_int8_generator(model: ReferenceModel, threads: int | None = None, cach
             mark_used(path)  # prune_cache deletes the least recently used
             return generator
         except Exception as exc:  # noqa: BLE001 - any unreadable model is rebuilt
+            raise_if_interrupted(exc)
             log.warning("the cached int8 generator %s does not load (%s); rebuilding it", path, exc)
     fp32 = OnnxGenerator(model.build_generator("cpu"), model.canvas.size, with_plate, threads)
     try:
@@ -241,6 +243,7 @@ def build_int8_generator(model: ReferenceModel, threads: int | None = None, cach
         diff = float(np.mean([np.abs(generator.session.run(None, feed)[0] - frame).mean()
                               for feed, frame in zip(feeds, frames)]))
     except Exception as exc:  # noqa: BLE001 - driving goes on in fp32, whatever broke
+        raise_if_interrupted(exc)
         log.warning("int8 quantisation of the generator failed (%s: %s); running it in fp32",
                     type(exc).__name__, str(exc).strip().splitlines()[0][:200] if str(exc).strip() else "")
         return fp32

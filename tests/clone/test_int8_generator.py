@@ -169,6 +169,19 @@ def test_failed_quantisation_falls_back_to_fp32(model, tmp_path, caplog, monkeyp
     np.testing.assert_allclose(rollout(generator, model, 3), expected, atol=1e-5)
 
 
+def test_a_signal_inside_quantisation_stops_the_command_instead_of_falling_back(model, tmp_path, monkeypatch):
+    def interrupted(*args, **kwargs):
+        try:
+            raise SystemExit(143)  # the SIGTERM handler, as if the signal arrived inside onnxruntime
+        except SystemExit as stop:
+            raise ImportError("initialization failed") from stop  # what the extension makes of it
+
+    monkeypatch.setattr(int8_generator, "quantize", interrupted)
+    with pytest.raises(SystemExit) as ended:
+        build_int8_generator(model, threads=1, cache_dir=tmp_path, config=FAST)
+    assert ended.value.code == 143 and list(tmp_path.iterdir()) == []
+
+
 def test_int8_frames_far_from_fp32_fall_back_to_fp32(model, tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="clone.int8_generator"):
         generator = build_int8_generator(model, threads=1, cache_dir=tmp_path,
