@@ -15,7 +15,7 @@ from retarget.api import load_retargeter
 from retarget.checkpoint import load_checkpoint
 from retarget.train import fit
 from tests.retarget.test_distributed import free_port
-from tests.retarget.test_train import TINY, FakeSplit
+from tests.retarget.training.fake_split import TINY, FakeSplit
 
 pytestmark = [
     pytest.mark.cuda,

@@ -37,7 +37,7 @@ from retarget.train import (
     split_statistics,
     train_step,
 )
-from tests.retarget.test_train import TINY, FakeSplit
+from tests.retarget.training.fake_split import TINY, FakeSplit
 
 EVEN = TINY  # a global batch of 4: 2 samples per process, 2 steps per epoch
 UNEVEN = dataclasses.replace(TINY, batch_size=3, samples_per_epoch=6)  # 1 + 2 samples per step

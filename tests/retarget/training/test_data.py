@@ -1,0 +1,98 @@
+"""retarget.training.data: cross samples, the frontal share, body scales, camera spreads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pose_io import InputError
+from retarget.augment import combo_index
+from retarget.train import CrossSamples, TrainConfig, body_scales, character_heights
+from tests.retarget.training.fake_split import TINY, CameraSplit, FakeSplit
+
+
+def test_samples_are_deterministic_and_consistent():
+    split = FakeSplit()
+    samples = CrossSamples(split, 64, "full", 10, seed=3)
+    a, b = samples.sample(2, 5), samples.sample(2, 5)
+    np.testing.assert_array_equal(a["windows"], b["windows"])
+    ids = a["ids"]
+    assert (ids[0] != ids[1]).all()  # full model: motions, characters and views all differ
+    w = a["windows"]
+    # Every window is the world's window of its combination, seen through the view slot's camera.
+    for k, (m, c, v) in enumerate([(m, c, v) for m in (0, 1) for c in (0, 1) for v in (0, 1)]):
+        clean = split.window(ids[m, 0], ids[c, 1], ids[v, 2], length=64)
+        assert np.abs(w[k] - clean).max() < 40  # within the small camera tilt
+    assert not np.array_equal(w[combo_index(0, 0, 0)], w[combo_index(0, 1, 0)])
+    skeleton = CrossSamples(split, 64, "skeleton", 10, seed=3).sample(0, 0)
+    assert skeleton["ids"][0, 2] == skeleton["ids"][1, 2]  # no view encoder: one view
+    np.testing.assert_array_equal(skeleton["windows"][combo_index(0, 1, 0)], skeleton["windows"][combo_index(0, 1, 1)])
+
+
+# ids of samples 0-2 of epoch 1 of CrossSamples(FakeSplit(views=5), 64, "full", 200, seed=3), as drawn by the
+# code before the frontal share existed.
+PLAIN_IDS = [[[2, 2, 0], [1, 0, 2]], [[1, 2, 0], [2, 1, 4]], [[1, 2, 1], [2, 1, 2]]]
+
+
+def test_a_frontal_share_draws_views_near_the_front_and_nothing_else_changes():
+    split = FakeSplit(views=5)  # yaws -57, -29, 0, 29, 57 degrees: bins 1-3 are frontal
+    plain = CrossSamples(split, 64, "full", 200, seed=3)
+    frontal = CrossSamples(split, 64, "full", 200, seed=3, frontal=1.0)
+    half = CrossSamples(split, 64, "full", 200, seed=3, frontal=0.5)
+    # No share: the samples drawn before the option existed (ids recorded from that code), bit for bit.
+    assert [plain.sample(1, i)["ids"].tolist() for i in range(3)] == PLAIN_IDS
+    views = {name: np.array([d.sample(1, i)["ids"][:, 2] for i in range(200)]) for name, d in
+             (("plain", plain), ("frontal", frontal), ("half", half))}  # fmt: skip
+    assert set(np.unique(views["frontal"])) == {1, 2, 3}
+    assert (views["frontal"][:, 0] != views["frontal"][:, 1]).all()  # still two views per sample
+    outside = {name: np.isin(v, (0, 4)).any(axis=1).mean() for name, v in views.items()}
+    assert 0.6 < outside["plain"] < 0.8  # 1 - 3/5 * 2/4 = 0.7
+    assert 0.25 < outside["half"] < 0.45  # half of it
+    # A window is still the split's window of its ids, through the view slot's camera (only views moved).
+    sample = frontal.sample(0, 0)
+    ids = sample["ids"]
+    clean = split.window(ids[0, 0], ids[0, 1], ids[0, 2], length=64)
+    assert np.abs(sample["windows"][combo_index(0, 0, 0)] - clean).max() < 40
+    with pytest.raises(InputError, match="within 45 degrees"):
+        CrossSamples(FakeSplit(views=2), 64, "full", 4, seed=0, frontal=0.5)
+    config = TrainConfig(frontal_share=0.5)
+    assert TrainConfig.from_dict(config.to_dict()) == config
+    assert TrainConfig.from_dict({k: v for k, v in config.to_dict().items() if k != "frontal_share"}) == TrainConfig()
+
+
+def test_characters_are_brought_to_one_height(tmp_path):
+    split = FakeSplit(characters=3)
+    heights = character_heights(split, 64, 4, seed=0)
+    assert heights.shape == (3,) and np.ptp(heights) > 1.0  # the fake characters differ in size
+    scales = body_scales(split, TINY, target=100.0)
+    np.testing.assert_allclose(character_heights_scaled(split, scales), 100.0, rtol=0.05)
+    assert body_scales(split, TrainConfig(body_normalise=False), 100.0) is None
+
+
+def character_heights_scaled(split, scales):
+    from pose_io.measures import skeleton_heights
+
+    return np.array([np.median(skeleton_heights(np.stack([split.window(m, c, 0) * scales[c] for m in range(2)])))
+                     for c in range(split.num_characters)])  # fmt: skip
+
+
+def test_a_camera_spread_reaches_the_split_and_windows_keep_the_height():
+    from pose_io.measures import skeleton_heights
+    from retarget.world import CameraSpread
+
+    split = CameraSplit()
+    scales = body_scales(split, TINY, target=100.0)
+    split.seen.clear()
+    spread = CameraSpread(max_pitch=30.0, perspective=1.0)
+    samples = CrossSamples(split, 64, "full", 4, seed=0, scales=scales, cameras=spread, height=100.0)
+    windows = samples.sample(0, 0)["windows"]
+    assert split.seen and all(c == spread for c in split.seen)
+    # Each window brought to the target height by its own skeleton height, as inference brings a track.
+    np.testing.assert_allclose(skeleton_heights(windows), 100.0, rtol=1e-4)
+    # The world's cameras: the split is called as before and the characters' own scales apply.
+    split.seen.clear()
+    plain = CrossSamples(split, 64, "full", 4, seed=0, scales=scales).sample(0, 0)["windows"]
+    assert split.seen == [None] * len(split.seen)
+    assert np.ptp(skeleton_heights(plain)) > 0.01  # per character, not per window
+    with pytest.raises(ValueError, match="target height"):
+        CrossSamples(split, 64, "full", 4, seed=0, scales=scales, cameras=spread)
