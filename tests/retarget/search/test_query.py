@@ -1,11 +1,9 @@
-"""Motion retrieval: the index and its file, the one-pass search, its hits, and the evaluation's plumbing."""
+"""retarget.search.query: the one-pass search over an index, its hits, the encoders it compares."""
 
 from __future__ import annotations
 
 import itertools
 import json
-import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,53 +12,9 @@ import torch
 from pose_io.errors import InputError
 from pose_io.resample import resample
 from pose_io.track import PoseTrack
-from pose_io.writers import write_track
-from retarget.api import load_retargeter
-from retarget.search import (
-    JointEncoder,
-    MotionCodeEncoder,
-    SearchIndex,
-    build_index,
-    correlate,
-    find_tracks,
-    from_sequences,
-    load_index,
-    save_index,
-    search,
-)
+from retarget.search import JointEncoder, MotionCodeEncoder, correlate, from_sequences, search
 from retarget.search.features import query_features, track_features
-from tests.figures import walking_figure
-
-FRAMES = 160
-
-
-def moving_figure(seed: int, frames: int = FRAMES, **figure: object) -> PoseTrack:
-    """A walking figure whose joints also wander smoothly at random: a motion that never repeats itself."""
-    base = walking_figure(frames, seed=seed, **figure)
-    rng = np.random.default_rng(100 + seed)
-    noise = rng.normal(0.0, 1.0, base.joints.shape)
-    kernel = np.exp(-0.5 * (np.arange(-12, 13) / 5.0) ** 2)
-    for j in range(noise.shape[1]):
-        for c in range(2):
-            noise[:, j, c] = np.convolve(noise[:, j, c], kernel / kernel.sum() * 6, mode="same")
-    return base.replace(joints=base.joints + 25.0 * noise.astype(np.float32))
-
-
-@pytest.fixture(scope="module")
-def encoder() -> MotionCodeEncoder:
-    return MotionCodeEncoder(load_retargeter(None, "cpu"))
-
-
-@pytest.fixture(scope="module")
-def tracks() -> list[PoseTrack]:
-    return [moving_figure(seed) for seed in range(4)]
-
-
-@pytest.fixture(scope="module")
-def index(encoder: MotionCodeEncoder, tracks: list[PoseTrack]) -> SearchIndex:
-    sequences = [track_features(encoder, t) for t in tracks]
-    return from_sequences(sequences, [f"t{k}" for k in range(len(tracks))], [t.fps for t in tracks],
-                          [len(t) for t in tracks], encoder)
+from tests.retarget.search.moving import FRAMES, moving_figure
 
 
 def test_features_are_the_network_codes_in_steps_of_8(encoder, tracks, index):
@@ -213,92 +167,6 @@ def test_raw_joint_baseline_runs_the_same_search(tracks):
     assert hits[0].path == "t3" and hits[0].start == 21 and hits[0].score > 0.99
 
 
-# --------------------------------------------------------------------------------------- files and folders
-
-
-def _write_collection(root: Path, tracks: list[PoseTrack]) -> None:
-    write_track(tracks[0], root / "a" / "first.npz")
-    write_track(tracks[1], root / "a" / "b" / "second")  # an OpenPose folder: one track, its frames not walked
-    write_track(tracks[2], root / "third.csv")
-    (root / "a" / "notes.json").write_text("{}")  # found in a folder, unreadable: skipped
-    (root / "a" / ".hidden.npz").write_bytes(b"junk")  # hidden: not even looked at
-
-
-def test_index_round_trip(encoder, tracks, tmp_path):
-    _write_collection(tmp_path / "tracks", tracks)
-    found = find_tracks([tmp_path / "tracks"])
-    names = sorted(p.name for p, _ in found)
-    assert names == ["first.npz", "notes.json", "second", "third.csv"]
-    assert not any(named for _, named in found)
-    again = find_tracks([tmp_path / "tracks" / "third.csv", tmp_path / "tracks"])  # reached twice: listed once
-    assert (again[0][0].name, again[0][1]) == ("third.csv", True) and len(again) == 4
-    calls = []
-    index, skipped = build_index([tmp_path / "tracks"], encoder, progress=lambda d, t, p: calls.append((d, t)))
-    assert [Path(s.path).name for s in skipped] == ["notes.json"]
-    assert calls[-1] == (4, 4)
-    assert sorted(Path(p).name for p in index.paths) == ["first.npz", "second", "third.csv"]
-    assert list(index.frames) == [FRAMES] * 3 and list(index.track_fps) == [30.0] * 3
-
-    path = save_index(index, tmp_path / "collection.index")
-    assert path.is_file() and not list(tmp_path.glob(".collection*"))  # one file, no temporary left
-    with pytest.raises(InputError, match="already exists"):
-        save_index(index, path)
-    loaded = load_index(path)
-    assert loaded.paths == index.paths and (loaded.kind, loaded.digest, loaded.stride) == ("motion", encoder.digest, 8)
-    assert np.array_equal(loaded.offsets, index.offsets) and np.array_equal(loaded.frames, index.frames)
-    assert torch.allclose(loaded.features, index.features, atol=2e-2, rtol=1e-3)  # float16 on disk
-    query = tracks[1].frames(16, 80)
-    a, b = search(index, encoder, query, top_k=3), search(loaded, encoder, query, top_k=3)
-    assert [(h.path, h.start, h.end) for h in a] == [(h.path, h.start, h.end) for h in b]
-    assert [h.score for h in a] == pytest.approx([h.score for h in b], abs=1e-3)
-
-
-def test_a_named_unreadable_track_is_an_error(encoder, tmp_path):
-    (tmp_path / "bad.json").write_text("[1, 2")
-    with pytest.raises(InputError, match="bad.json"):
-        build_index([tmp_path / "bad.json"], encoder)
-    with pytest.raises(InputError, match="no such file"):
-        build_index([tmp_path / "missing"], encoder)
-    with pytest.raises(InputError, match="no readable pose tracks"):
-        build_index([tmp_path], encoder)  # only the unreadable one, found in a folder
-    write_track(walking_figure(10), tmp_path / "short.npz")
-    with pytest.raises(InputError, match="at least 16"):
-        build_index([tmp_path / "short.npz"], encoder)
-
-
-def _rewrite(path: Path, out: Path, **changes: object) -> Path:
-    with np.load(path, allow_pickle=False) as data:
-        arrays = {k: data[k] for k in data.files}
-    arrays.update(changes)
-    for key in [k for k, v in changes.items() if v is None]:
-        del arrays[key]
-    with open(out, "wb") as f:
-        np.savez(f, **arrays)
-    return out
-
-
-def test_bad_index_files_are_input_errors(encoder, index, tmp_path):
-    good = save_index(index, tmp_path / "good.npz")
-    cases = {
-        "missing": (tmp_path / "nope.npz", "no such search index"),
-        "text": (tmp_path / "text.npz", "not a readable search index"),
-        "truncated": (tmp_path / "cut.npz", "not a readable search index"),
-        "other npz": (tmp_path / "other.npz", "not a clone2d search index"),
-        "newer": (_rewrite(good, tmp_path / "newer.npz", version=np.array(99)), "version 99; this clone2d reads up"),
-        "no features": (_rewrite(good, tmp_path / "nofeat.npz", features=None), "damaged search index"),
-        "bad offsets": (_rewrite(good, tmp_path / "offsets.npz", offsets=np.array([0, 5, 3, 60, 80])), "damaged"),
-        "nan": (_rewrite(good, tmp_path / "nan.npz", features=np.full((128, 80), np.nan, np.float16)), "damaged"),
-    }
-    (tmp_path / "text.npz").write_text("hello")
-    (tmp_path / "cut.npz").write_bytes(good.read_bytes()[:500])
-    np.savez(tmp_path / "other.npz", joints=np.zeros((3, 15, 2)))
-    for name, (path, message) in cases.items():
-        with pytest.raises(InputError, match=message):
-            load_index(path)
-        assert name  # for the failure report
-    assert zipfile.is_zipfile(good)
-
-
 def test_an_index_answers_only_its_own_encoder(index, tracks):
     with pytest.raises(InputError, match="rebuild the index or pass the same --weights"):
         search(index, JointEncoder(), tracks[0].frames(0, 64))
@@ -309,47 +177,3 @@ def test_match_to_dict_is_json(encoder, tracks, index):
     assert hit.path == "t0" and abs(hit.start - 8) <= 1 and hit.end - hit.start == 64
     assert json.loads(json.dumps(hit.to_dict())) == {"path": "t0", "track": 0, "start": hit.start, "end": hit.end,
                                                       "score": pytest.approx(hit.score)}  # fmt: skip
-
-
-# --------------------------------------------------------------------------------------- evaluation
-
-
-@pytest.fixture(scope="module")
-def tiny_world(tmp_path_factory: pytest.TempPathFactory):
-    """A motion world of four humanoid clips written here (see tests/retarget/world/humanoid.py)."""
-    from retarget.world import MotionWorld
-    from tests.retarget.world.humanoid import write_clip
-
-    root = tmp_path_factory.mktemp("mocap")
-    (root / "bandai").mkdir()
-    for name in ("walk_normal_001", "bow_normal_001", "run_normal_001", "walk_fast_001"):
-        write_clip(root / "bandai" / f"dataset-1_{name}.bvh.gz")
-    return MotionWorld.build(root, tmp_path_factory.mktemp("cache"), n_train_characters=2, n_val_characters=2,
-                             n_test_characters=2)  # fmt: skip
-
-
-def test_retrieval_evaluation_on_a_tiny_world(encoder, tiny_world):
-    from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table
-
-    split = tiny_world.split("test")
-    calls = []
-    config = RetrievalEvalConfig(queries=4, seed=3)
-    doc = evaluate_retrieval(split, encoder, config, fps=tiny_world.config.fps,
-                             progress=lambda done, total: calls.append((done, total)))  # fmt: skip
-    assert calls[-1] == (8, 8)  # both methods
-    assert doc["queries"] == 4 and doc["tracks"] == doc["clips"] * 4 and doc["split"] == "test"
-    assert set(doc["methods"]) == {"motion", "joints"}
-    for m in doc["methods"].values():
-        assert 0.0 <= m["top1"] <= m["topk"] <= 1.0
-        assert m["localised"] <= 4 and sum(m["queries_by_view_gap"].values()) == 4
-    # One clip in the test split: every hit is the query's motion, and the same seed gives the same numbers.
-    if doc["clips"] == 1:
-        assert doc["methods"]["motion"]["top1"] == 1.0
-    again = evaluate_retrieval(split, encoder, config, fps=tiny_world.config.fps)["methods"]
-    for name, m in doc["methods"].items():
-        assert {k: v for k, v in again[name].items() if k != "seconds_per_query"} == {
-            k: v for k, v in m.items() if k != "seconds_per_query"}
-    table = markdown_table(doc)
-    assert "motion codes (ours)" in table and "raw joints" in table and "top-5" in table
-    with pytest.raises(ValueError):
-        RetrievalEvalConfig(pairs_per_clip=2)
