@@ -15,20 +15,72 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def free_cores() -> int:
+PROC_STAT = "/proc/stat"
+SAMPLE_SECONDS = 0.1  # long enough for 10 ticks per core at Linux's 100 Hz, short enough for every command start
+
+
+def cpu_times(cores: set[int], path: str = PROC_STAT) -> tuple[int, int] | None:
+    """Busy and total clock ticks of ``cores`` since boot, from Linux's /proc/stat; None where it is unreadable.
+
+    Busy is user, nice, system, irq, softirq and steal time (a core the hypervisor lends elsewhere is not free);
+    idle and iowait are free time.
+    """
+    busy = total = 0
+    seen = 0
+    try:
+        with open(path, encoding="ascii") as f:
+            for line in f:
+                name, *fields = line.split()
+                if not name.startswith("cpu") or not name[3:].isdigit() or int(name[3:]) not in cores:
+                    continue
+                ticks = [int(v) for v in fields[:8]] + [0] * (8 - len(fields[:8]))
+                user, nice, system, idle, iowait, irq, softirq, steal = ticks
+                busy += user + nice + system + irq + softirq + steal
+                total += user + nice + system + idle + iowait + irq + softirq + steal
+                seen += 1
+    except (OSError, ValueError):
+        return None
+    return (busy, total) if seen else None
+
+
+def busy_cores(cores: set[int], seconds: float = SAMPLE_SECONDS, path: str = PROC_STAT) -> float | None:
+    """How many of ``cores`` other processes keep busy now: their busy share over ``seconds`` (this process
+    sleeps meanwhile) times their number; None without /proc/stat."""
+    import time
+
+    before = cpu_times(cores, path)
+    if before is None:
+        return None
+    time.sleep(seconds)
+    after = cpu_times(cores, path)
+    if after is None or after[1] <= before[1]:
+        return None
+    return len(cores) * (after[0] - before[0]) / (after[1] - before[1])
+
+
+def free_cores(now: bool = True) -> int:
     """Cores this process may use that are not already busy (at least 1).
 
-    Uses the CPU affinity mask and the 1-minute load average: two threads on a core another process
-    keeps busy are many times slower than one.
+    Uses the CPU affinity mask and how busy those cores are now (a tenth of a second of /proc/stat); where that
+    cannot be read, or with ``now=False``, the 1-minute load average, which lags: just after an install or a
+    finished job it still counts cores that are idle again. Two threads on a core another process keeps busy are
+    many times slower than one.
+
+    Args:
+        now: read how busy the cores are now. Processes started together (torchrun) pass False: each would count
+            its siblings, busy importing beside it, as other work.
     """
     try:
-        cores = len(os.sched_getaffinity(0))
+        allowed = set(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
-        cores = os.cpu_count() or 1
-    try:
-        load = os.getloadavg()[0]
-    except OSError:
-        load = 0.0
+        allowed = set(range(os.cpu_count() or 1))
+    cores = len(allowed)
+    load = busy_cores(allowed) if now else None
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:
+            load = 0.0
     return max(1, min(cores, int(cores - load + 0.5)))
 
 

@@ -146,7 +146,7 @@ def training_device(spec: str, threads: int | None = None):  # -> torch.device
     except ValueError as exc:
         raise InputError(str(exc)) from None
     if launch is not None and threads is None:
-        threads = distributed.cpu_threads(launch, free_cores())
+        threads = distributed.cpu_threads(launch, free_cores(now=False))  # the siblings would count as busy
     return resolve_device_option(spec, threads)
 
 

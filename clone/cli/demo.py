@@ -24,8 +24,8 @@ def demo_command(
         Path | None, typer.Option("--weights", help="Retargeting weights (default: the shipped ones).")
     ] = None,
     threads: Annotated[
-        int | None, typer.Option("--threads", min=1, help="CPU threads (default: the cores the 1-minute load "
-                                 "average leaves free; training steps in the budget scale with them).")
+        int | None, typer.Option("--threads", min=1, help="CPU threads (default: the cores other processes leave "
+                                 "free now; training steps in the budget scale with them).")
     ] = None,
 ) -> None:
     """Render a reference and three driver pairs with ground truth; train once; report every pair and sum up."""
