@@ -1,24 +1,19 @@
-"""Feet on the ground: when an ankle touches it, and holding it still there (foot-contact cleanup).
+"""Holding feet still on the ground: ``foot_lock``, the animator's cleanup of a retargeted track.
 
-* ``foot_contacts``: an ankle touches the ground in a frame when it is within ``height_tol * height`` of its
-  lowest point (largest y) over a centred window of about a second and moves slowly *vertically*
-  (``|dy| <= speed_tol * height``). Horizontal speed is deliberately not part of the test: the same test finds the
-  frames in which the report measures foot skating (``clone.metrics.poses.foot_slide``), and a speed cap there
-  would cap the very slide it measures.
-* ``foot_lock``: the animator's cleanup of a retargeted track. The contacts come from the *driver* (whose feet
-  really were on the ground). First the whole body moves horizontally against the common slide of the ankles
-  in contact (``root_shift``): that removes most of the slide without changing the pose at all (the MidHip-
-  aligned pose error cannot grow), and it is the walk the planted feet imply. Then, during each contact interval,
-  each ankle is held at one x, the mean of its own x over the interval (the least-squares choice: the smallest
-  change that removes the rest of the slide). Its y is not forced to one ground line: the leg swings about the
-  hip with its extension (hip-ankle distance, so the knee angle) kept (``swing_target``), and the ankle's y
-  changes only to second order. Measured on the demo pairs, forcing y too made the retargeted legs, nearly
-  straight while standing, bend and unbend at the knee from frame to frame (knee jitter up to 5x) and raised the
-  pose error by up to 0.7 % of the height; the contact test already keeps a touching ankle within 2 % of the
-  height of its lowest point. Outside an interval the correction fades out over ``blend`` frames
-  (smoothstep), so there are no pops; between two close intervals it cross-fades. The knee is re-solved by
-  two-bone IK in 2D from the (unchanged) hip with the thigh and shin lengths of that frame of the input and kept
-  on the side it bent to; a target out of reach is pulled along the hip-target line, so bone lengths always hold.
+The contacts (:mod:`pose_io.contacts`) come from the *driver* (whose feet
+really were on the ground). First the whole body moves horizontally against the common slide of the ankles
+in contact (``root_shift``): that removes most of the slide without changing the pose at all (the MidHip-
+aligned pose error cannot grow), and it is the walk the planted feet imply. Then, during each contact interval,
+each ankle is held at one x, the mean of its own x over the interval (the least-squares choice: the smallest
+change that removes the rest of the slide). Its y is not forced to one ground line: the leg swings about the
+hip with its extension (hip-ankle distance, so the knee angle) kept (``swing_target``), and the ankle's y
+changes only to second order. Measured on the demo pairs, forcing y too made the retargeted legs, nearly
+straight while standing, bend and unbend at the knee from frame to frame (knee jitter up to 5x) and raised the
+pose error by up to 0.7 % of the height; the contact test already keeps a touching ankle within 2 % of the
+height of its lowest point. Outside an interval the correction fades out over ``blend`` frames
+(smoothstep), so there are no pops; between two close intervals it cross-fades. The knee is re-solved by
+two-bone IK in 2D from the (unchanged) hip with the thigh and shin lengths of that frame of the input and kept
+on the side it bent to; a target out of reach is pulled along the hip-target line, so bone lengths always hold.
 """
 
 from __future__ import annotations
@@ -30,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pose_io.clean import gaussian_kernel, true_runs
+from pose_io.contacts import CONTACT_HEIGHT_TOL, CONTACT_SPEED_TOL, contact_window, foot_contacts
 from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 from pose_io.measures import ANKLES, as_layout, check_joints, skeleton_height
@@ -39,10 +35,6 @@ log = logging.getLogger(__name__)
 
 # A knee bent by less than this (sine of the hip-knee-ankle turn) shows no side: it takes its neighbours'.
 _STRAIGHT = 1e-3
-# The contact test's defaults (``foot_contacts``), shared by the cleanup and the report's foot-skating measure.
-CONTACT_WINDOW = 31
-CONTACT_HEIGHT_TOL = 0.02
-CONTACT_SPEED_TOL = 0.01
 
 
 @dataclass(frozen=True)
@@ -69,56 +61,6 @@ class FootLockConfig:
 
 
 DEFAULT_FOOT_LOCK = FootLockConfig()
-
-
-def contact_window(fps: float) -> int:
-    """Odd number of frames closest to one second: the window in which an ankle's lowest point is the ground."""
-    return round(fps) // 2 * 2 + 1
-
-
-def _window_max(values: np.ndarray, window: int) -> np.ndarray:
-    """[T] NaN-ignoring maximum of ``values`` [T] over a centred window of ``window`` frames."""
-    half = max(0, window // 2)
-    padded = np.pad(values, half, constant_values=np.nan)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1)  # [T, 2 half + 1]
-    out = np.full(values.shape, np.nan)
-    seen = ~np.isnan(windows).all(axis=1)
-    out[seen] = np.nanmax(windows[seen], axis=1)
-    return out
-
-
-def foot_contacts(
-    joints: np.ndarray,
-    height: float,
-    layout: JointLayout | str = "body15",
-    window: int = CONTACT_WINDOW,
-    height_tol: float = CONTACT_HEIGHT_TOL,
-    speed_tol: float = CONTACT_SPEED_TOL,
-) -> np.ndarray:
-    """Which ankles touch the ground in which frames.
-
-    Args:
-        joints: [T, J, 2] pixel coordinates (y down).
-        height: body height in pixels; the tolerances are fractions of it.
-        layout: joint layout of ``joints`` (needs ``l_ankle``, ``r_ankle``).
-        window: frames of the centred window whose lowest ankle point is the ground (about a second).
-        height_tol: how far above that point (in heights) an ankle may be and still touch.
-        speed_tol: the largest vertical move (heights per frame) of an ankle that touches.
-
-    Returns:
-        [T, 2] bool, columns in ``ANKLES`` order.
-    """
-    layout = as_layout(layout)
-    feet = check_joints(joints, layout, "foot contacts")[:, layout.indices(ANKLES)]  # [T, 2, 2]
-    y = feet[..., 1]  # [T, 2]
-    contact = np.zeros(y.shape, dtype=bool)
-    for f in range(y.shape[1]):
-        ground = _window_max(y[:, f], window)
-        dy = np.abs(np.diff(y[:, f]))
-        speed = np.concatenate([dy[:1], dy]) if dy.size else np.zeros(1)  # frame 0 uses the next step
-        with np.errstate(invalid="ignore"):
-            contact[:, f] = (y[:, f] >= ground - height_tol * height) & (speed <= speed_tol * height)
-    return contact
 
 
 def track_contacts(track: PoseTrack, config: FootLockConfig = DEFAULT_FOOT_LOCK) -> np.ndarray:

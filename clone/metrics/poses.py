@@ -11,7 +11,7 @@ the methods share one scale.
 * foot skating: the horizontal slide of an ankle between two frames in which it is in contact. An ankle is in
   contact when it is within ``height_tol * height`` of its lowest point (largest y) over a centred window and
   moves slowly *vertically* (``|dy| <= speed_tol * height``). Horizontal speed is deliberately not part of the
-  contact test, otherwise the test would cap the very slide it measures. The test lives in ``pose_io.feet``
+  contact test, otherwise the test would cap the very slide it measures. The test lives in ``pose_io.contacts``
   (``foot_contacts``), shared with the foot-contact cleanup of `clone drive`.
 * temporal jitter: the mean norm of the second difference ``x[t+1] - 2 x[t] + x[t-1]`` of every joint.
 * outside share: the share of present joints outside the image.
@@ -38,14 +38,14 @@ from pose_io.compare import (
     root_distance,
     same_facing,
 )
-from pose_io.errors import InputError
-from pose_io.feet import (  # one home: the cleanup honours the same contacts
+from pose_io.contacts import (  # one home: the cleanup honours the same contacts
     CONTACT_HEIGHT_TOL,
     CONTACT_SPEED_TOL,
     CONTACT_WINDOW,
     contact_window,
     foot_contacts,
 )
+from pose_io.errors import InputError
 from pose_io.layouts import JointLayout
 from pose_io.measures import ANKLES, as_layout, check_joints, limb_lengths, skeleton_height
 from pose_io.track import PoseTrack

@@ -1,10 +1,11 @@
-"""pose_io.feet: foot contacts and the foot-contact cleanup on a synthetic walk with known contacts."""
+"""pose_io.contacts and pose_io.feet: foot contacts and their cleanup on a synthetic walk with known contacts."""
 
 import numpy as np
 import pytest
 
+from pose_io.contacts import foot_contacts
 from pose_io.errors import InputError
-from pose_io.feet import FootLockConfig, ankle_offsets, foot_contacts, foot_lock, swing_target, two_bone_ik
+from pose_io.feet import FootLockConfig, ankle_offsets, foot_lock, swing_target, two_bone_ik
 from pose_io.layouts import get_layout
 
 BODY15 = get_layout("body15")
