@@ -14,16 +14,9 @@ from retarget.training.data import (
     real_windows,
     split_statistics,
 )
-from retarget.training.loop import (
-    CPU,
-    DEFAULT_EPOCHS,
-    ProgressFn,
-    TrainProgress,
-    TrainSummary,
-    fit,
-    retargeting_error,
-)
+from retarget.training.loop import CPU, DEFAULT_EPOCHS, TrainSummary, fit, retargeting_error
 from retarget.training.run import read_real_tracks, train
+from retarget.training.state import ProgressFn, TrainProgress
 from retarget.training.step import TrainLoss, batch_tensors, evaluate, part_tensors, train_step
 
 __all__ = [

@@ -19,7 +19,8 @@ The split interface used here (the motion world provides it)::
 
 Modules: :mod:`~retarget.training.config` (:class:`TrainConfig`), :mod:`~retarget.training.data` (samples,
 real windows, statistics, body scales), :mod:`~retarget.training.step` (batch tensors, the loss of one step,
-validation), :mod:`~retarget.training.loop` (the loop, its checkpoints and resume) and
+validation), :mod:`~retarget.training.state` (where a run starts, what its steps share, its checkpoint and
+resume state), :mod:`~retarget.training.loop` (the loop: epochs, time budget, the best epoch, the weight average) and
 :mod:`~retarget.training.run` (from folders on disk to :func:`~retarget.training.loop.fit`). The public names
 are imported from :mod:`retarget.train`.
 """

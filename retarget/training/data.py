@@ -192,7 +192,7 @@ def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: Preproces
 
 
 
-def _validation_set(
+def validation_set(
     split: WorldSplit, config: TrainConfig, scales: np.ndarray | None
 ) -> tuple[torch.Tensor, torch.Tensor] | None:
     if split.num_motions < 2:
@@ -205,7 +205,7 @@ def _validation_set(
     return windows, ids
 
 
-def _loader(
+def batch_loader(
     dataset: CrossSamples, first_step: int, steps: int, batch_size: int, workers: int, part: slice | None = None,
     pin: bool = False,
 ) -> Iterator:

@@ -1,67 +1,30 @@
-"""The training loop (:func:`fit`): epochs, time budget, one checkpoint rewritten atomically, exact resume."""
+"""The training loop (:func:`fit`): epochs, time budget, one checkpoint rewritten atomically, exact resume, the
+best epoch and the weight average. A run's state and where it starts: :mod:`retarget.training.state`."""
 
 from __future__ import annotations
 
-import copy
-import dataclasses
 import logging
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-import numpy as np
 import torch
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget import distributed
-from retarget.checkpoint import RetargetWeights, load_checkpoint, save_checkpoint
-from retarget.model import RetargetNet, variant_config
-from retarget.training.average import WeightAverage
+from retarget.checkpoint import RetargetWeights, save_checkpoint
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
-from retarget.training.data import (
-    CrossSamples,
-    WorldSplit,
-    _loader,
-    _validation_set,
-    body_scales,
-    character_heights,
-    mean_pose_height,
-    real_windows,
-    split_statistics,
-)
-from retarget.training.step import TrainLoss, character_proportions, evaluate, train_step
+from retarget.training.data import CrossSamples, WorldSplit, batch_loader, body_scales, validation_set
+from retarget.training.state import ProgressFn, TrainingRun, TrainProgress, begin_run, start_run
+from retarget.training.step import evaluate, train_step
 
 log = logging.getLogger(__name__)
 
 CPU = torch.device("cpu")
 DEFAULT_EPOCHS = 300  # the authors' schedule, used when neither epochs nor minutes are given
-
-
-@dataclass(frozen=True)
-class TrainProgress:
-    """Where a training run stands, passed to a progress callback after every step and every epoch.
-
-    Attributes:
-        epoch: the current epoch, counted from 1.
-        step: steps done in this epoch.
-        steps_per_epoch: steps an epoch has.
-        global_step: steps done in total (over resumed runs too).
-        losses: the last step's loss terms, or at the end of an epoch (``step == steps_per_epoch``) the
-            epoch's record (train means, ``val_*`` validation losses).
-    """
-
-    epoch: int
-    step: int
-    steps_per_epoch: int
-    global_step: int
-    losses: dict[str, float]
-
-
-ProgressFn = Callable[[TrainProgress], None]
 
 
 @dataclass(frozen=True)
@@ -158,11 +121,7 @@ def fit(
             smaller than the number of processes.
     """
     out = Path(out)
-    for extra, option in ((best, "best"), (average, "average")):
-        if extra is not None and Path(extra).resolve() == out.resolve():
-            raise InputError(f"{extra}: the {option} weights would replace the checkpoint; choose another file")
-    if best is not None and average is not None and Path(best).resolve() == Path(average).resolve():
-        raise InputError(f"{best}: the best and the averaged weights need two files")
+    _check_extra_files(out, best, average)
     dev = torch.device(device)
     world = distributed.current()
     target_epochs = epochs if epochs is not None else (DEFAULT_EPOCHS if minutes is None else math.inf)
@@ -172,175 +131,109 @@ def fit(
         part = distributed.shard(config.batch_size, world)
     except ValueError as exc:
         raise InputError(str(exc)) from None
-
-    if resume:
-        state = _resume_state(out, config)
-        model, stats, training = state["model"], state["stats"], state["training"]
-        preprocess = state["preprocess"]
-        init_from = training.get("init")
-        scales = body_scales(train_split, config, preprocess.body_height)
-    else:
-        _require_new(out)
-        torch.manual_seed(config.seed)
-        if init is not None:
-            if init.variant != config.variant:
-                raise InputError(f"{init.path}: a {init.variant} network; this run trains a {config.variant} one")
-            model, stats, init_from = copy.deepcopy(init.model), init.stats, str(init.path)
-            target = mean_pose_height(stats)
-        else:
-            model, stats, init_from = RetargetNet(variant_config(config.variant)), None, None
-            target = float(np.median(character_heights(train_split, config.window, 8, config.seed)))
-        target = round(target, 3)  # as stored, so that a resumed run computes the same scales
-        scales = body_scales(train_split, config, target)
-        preprocess = config.preprocess
-        if scales is not None:
-            preprocess = dataclasses.replace(preprocess, body_height=target)
-        if stats is None:
-            stats = split_statistics(train_split, config.window, config.stats_windows, config.seed, scales)
-        training = None
-    model.to(dev)
-    proportions = character_proportions(train_split).to(dev) if config.loss.skeleton_proportion_weight > 0 else None
-    step_loss = distributed.wrap(TrainLoss(model, stats, config, proportions), dev)  # DDP with several processes
-    dtype = distributed.amp_dtype(dev, amp)
-    optimizer = torch.optim.Adam(model.parameters(), lr=config.lr, amsgrad=config.amsgrad)
-    scheduler = torch.optim.lr_scheduler.ExponentialLR(optimizer, config.lr_decay)
-    generator = torch.Generator().manual_seed(config.seed)
-    real_rng = np.random.default_rng([config.seed, 104729])
-    if training is not None:
-        optimizer.load_state_dict(training["optimizer"])
-        scheduler.load_state_dict(training["scheduler"])
-        torch.set_rng_state(training["torch_rng"])  # rank 0's; other ranks re-seed every step
-        generator.set_state(training["augment_rng"])
-        real_rng.bit_generator.state = training["real_rng"]
-    done = training or {}
-    epoch: int = done.get("epoch", 0)
-    # Once a run averages, every later epoch joins the mean, written out or not (a call without ``average``).
-    stored = done.get("average")
-    averager = None
-    if average is not None or stored is not None:
-        first = average_from if average_from is not None else stored["first"] if stored is not None else 1
-        if stored is None and epoch >= first:
-            raise InputError(f"the weight average starts at epoch {first}, but this run has done {epoch} "
-                             "epochs without one; start it later")
-        averager = WeightAverage(first, model, stored)
-    step_in_epoch: int = done.get("step", 0)
-    global_step: int = done.get("global_step", 0)
-    elapsed_before: float = done.get("elapsed_s", 0.0)
-    history: list[dict[str, float]] = list(done.get("history", []))
-
-    size = config.samples_per_epoch
+    begin = begin_run(train_split, out, config, resume, init)
+    run = start_run(begin, train_split, out, config, dev, amp, real_tracks, average, average_from, progress, world,
+                     part, deadline, started)  # fmt: skip
     dataset = CrossSamples(
-        train_split, config.window, config.variant, size, config.seed, scales, config.cameras, preprocess.body_height,
-        config.frontal_share,
+        train_split, config.window, config.variant, config.samples_per_epoch, config.seed, begin.scales,
+        config.cameras, run.preprocess.body_height, config.frontal_share,
     )
-    steps_per_epoch = max(1, size // config.batch_size)
     val = None
     if val_split is not None and world.is_main:
-        val = _validation_set(val_split, config, body_scales(val_split, config, preprocess.body_height))
-    real = torch.from_numpy(real_windows(real_tracks, config.window, preprocess)) if real_tracks else None
-
-    def save() -> None:
-        # Nothing in it depends on the number of processes (see retarget.distributed).
-        if world.is_main:
-            save_checkpoint(out, model, stats, preprocess, training={
-                "config": config.to_dict(), "init": init_from, "epoch": epoch, "step": step_in_epoch,
-                "global_step": global_step, "optimizer": optimizer.state_dict(), "scheduler": scheduler.state_dict(),
-                "torch_rng": torch.get_rng_state(), "augment_rng": generator.get_state(),
-                "real_rng": real_rng.bit_generator.state,
-                "elapsed_s": elapsed_before + time.monotonic() - started, "history": history,
-                **({"average": averager.state()} if averager is not None else {}),
-            })
-        distributed.barrier()
-
-    def report(update: TrainProgress) -> None:
-        if progress is not None and world.is_main:
-            progress(update)
+        val = validation_set(val_split, config, body_scales(val_split, config, run.preprocess.body_height))
 
     stopped = "epochs"
     best_epoch = None
-    scores = [retargeting_error(r, config) for r in history]
+    scores = [retargeting_error(r, config) for r in run.history]
     lowest = min((v for v in scores if v is not None and math.isfinite(v)), default=math.inf)
-    averaged_before = averager.count if averager is not None else 0
-    while epoch < target_epochs:
-        dataset.epoch = epoch
-        sums: dict[str, float] = {}
-        counted = 0
-        loader = _loader(dataset, step_in_epoch, steps_per_epoch, config.batch_size, num_workers, part,
-                         pin=dev.type == "cuda")
-        out_of_time = False
-        for batch in loader:
-            if world.rank > 0:  # rank 0 continues the stored generator, as a single process does
-                torch.manual_seed(distributed.rank_seed(config.seed, world.rank, global_step))
-            batch = {k: v.to(dev, non_blocking=True) for k, v in batch.items()}
-            real_batch = None
-            if real is not None and len(real):
-                pick = real_rng.choice(len(real), min(config.real_batch_size, len(real)), replace=False)
-                real_batch = real[torch.from_numpy(pick)].to(dev)
-            losses = train_step(step_loss, optimizer, batch, stats, config, generator, real_batch, part=part,
-                                total=config.batch_size, dtype=dtype)
-            late = time.monotonic() > deadline
-            losses, (late,) = distributed.reduce_logs(losses, part.stop - part.start, [late])
-            for k, v in losses.items():
-                sums[k] = sums.get(k, 0.0) + v
-            counted += 1
-            step_in_epoch += 1
-            global_step += 1
-            report(TrainProgress(epoch + 1, step_in_epoch, steps_per_epoch, global_step, losses))
-            if late and step_in_epoch < steps_per_epoch:
-                out_of_time = True
-                break
+    averaged_before = run.averager.count if run.averager is not None else 0
+    while run.epoch < target_epochs:
+        dataset.epoch = run.epoch
+        loader = batch_loader(dataset, run.step_in_epoch, run.steps_per_epoch, config.batch_size, num_workers, part,
+                              pin=dev.type == "cuda")  # fmt: skip
+        sums, counted, out_of_time = _train_epoch(run, loader)
         if out_of_time:
-            save()
+            run.save()
             stopped = "time"
             if world.is_main:
-                log.info("time budget used up in epoch %d at step %d; checkpoint %s", epoch + 1, step_in_epoch, out)
+                log.info("time budget used up in epoch %d at step %d; checkpoint %s", run.epoch + 1,
+                         run.step_in_epoch, out)  # fmt: skip
             break
-        epoch += 1
-        step_in_epoch = 0
-        scheduler.step()
-        record = {"epoch": float(epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
-        if val is not None:
-            record.update({f"val_{k}": v for k, v in evaluate(model, *val, stats, config, dtype=dtype).items()})
-        record["seconds"] = elapsed_before + time.monotonic() - started
-        record = distributed.broadcast(record)  # rank 0 validated
-        history.append(record)
+        record = _close_epoch(run, sums, counted, val)
         # The best and averaged weights go first: a run stopped before the checkpoint below redoes this epoch.
-        if averager is not None and averager.update(epoch, model) and average is not None and world.is_main:
-            save_checkpoint(average, averager.module(), stats, preprocess)
+        if run.averager is not None and run.averager.update(run.epoch, run.model) and average is not None \
+                and world.is_main:
+            save_checkpoint(average, run.averager.module(), run.stats, run.preprocess)
         score = retargeting_error(record, config)
         if best is not None and score is not None and math.isfinite(score) and score < lowest:
-            lowest, best_epoch = score, epoch
+            lowest, best_epoch = score, run.epoch
             if world.is_main:
-                save_checkpoint(best, model, stats, preprocess)
-                log.info("epoch %d: lowest validation retargeting error so far (%.4f); weights in %s", epoch, score, best)
-        save()
-        report(TrainProgress(epoch, steps_per_epoch, steps_per_epoch, global_step, record))
+                save_checkpoint(best, run.model, run.stats, run.preprocess)
+                log.info("epoch %d: lowest validation retargeting error so far (%.4f); weights in %s", run.epoch,
+                         score, best)  # fmt: skip
+        run.save()
+        run.report(TrainProgress(run.epoch, run.steps_per_epoch, run.steps_per_epoch, run.global_step, record))
         if world.is_main:
-            log.info("epoch %d: %s", epoch, _format(record))
+            log.info("epoch %d: %s", run.epoch, _format(record))
         if distributed.any_rank(time.monotonic() > deadline):
-            stopped = "time" if epoch < target_epochs else "epochs"
+            stopped = "time" if run.epoch < target_epochs else "epochs"
             break
-    return TrainSummary(out, epoch, global_step, stopped, history, best_epoch,
-                        averager.count - averaged_before if average is not None else 0)
+    return TrainSummary(out, run.epoch, run.global_step, stopped, run.history, best_epoch,
+                        run.averager.count - averaged_before if average is not None else 0)
 
 
-def _require_new(out: Path) -> None:
-    if out.exists():
-        raise InputError(f"{out}: already exists; pass --resume to continue that run, or choose another --out")
+def _check_extra_files(out: Path, best: str | Path | None, average: str | Path | None) -> None:
+    """The best and averaged weights each need a file of their own, neither of them the checkpoint."""
+    for extra, option in ((best, "best"), (average, "average")):
+        if extra is not None and Path(extra).resolve() == out.resolve():
+            raise InputError(f"{extra}: the {option} weights would replace the checkpoint; choose another file")
+    if best is not None and average is not None and Path(best).resolve() == Path(average).resolve():
+        raise InputError(f"{best}: the best and the averaged weights need two files")
 
 
-def _resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
-    if not out.exists():
-        raise InputError(f"{out}: nothing to resume (no such checkpoint)")
-    loaded = load_checkpoint(out)
-    if loaded.training is None:
-        raise InputError(f"{out}: holds no training state to resume (only weights)")
-    stored = TrainConfig.from_dict(loaded.training["config"]).to_dict()  # settings added since: their defaults
-    mine = config.to_dict()
-    changed = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
-    if changed:
-        raise InputError(f"{out}: was trained with other settings ({', '.join(changed)}); resume with the same ones")
-    return {"model": loaded.model, "stats": loaded.stats, "training": loaded.training, "preprocess": loaded.preprocess}
+def _train_epoch(run: TrainingRun, loader: Iterable[dict[str, torch.Tensor]]) -> tuple[dict[str, float], int, bool]:
+    """The steps of the current epoch from where it stands, until it ends or the time is up; the sums of the
+    steps' losses, how many steps they hold, and whether the time ran out before the epoch's last step."""
+    config, world = run.config, run.world
+    sums: dict[str, float] = {}
+    counted = 0
+    for batch in loader:
+        if world.rank > 0:  # rank 0 continues the stored generator, as a single process does
+            torch.manual_seed(distributed.rank_seed(config.seed, world.rank, run.global_step))
+        batch = {k: v.to(run.device, non_blocking=True) for k, v in batch.items()}
+        real_batch = None
+        if run.real is not None and len(run.real):
+            pick = run.real_rng.choice(len(run.real), min(config.real_batch_size, len(run.real)), replace=False)
+            real_batch = run.real[torch.from_numpy(pick)].to(run.device)
+        losses = train_step(run.step_loss, run.optimizer, batch, run.stats, config, run.generator, real_batch,
+                            part=run.part, total=config.batch_size, dtype=run.dtype)  # fmt: skip
+        late = time.monotonic() > run.deadline
+        losses, (late,) = distributed.reduce_logs(losses, run.part.stop - run.part.start, [late])
+        for k, v in losses.items():
+            sums[k] = sums.get(k, 0.0) + v
+        counted += 1
+        run.step_in_epoch += 1
+        run.global_step += 1
+        run.report(TrainProgress(run.epoch + 1, run.step_in_epoch, run.steps_per_epoch, run.global_step, losses))
+        if late and run.step_in_epoch < run.steps_per_epoch:
+            return sums, counted, True
+    return sums, counted, False
+
+
+def _close_epoch(run: TrainingRun, sums: dict[str, float], counted: int,
+                 val: tuple[torch.Tensor, torch.Tensor] | None) -> dict[str, float]:
+    """Count the epoch done, step the schedule, validate (rank 0) and add the epoch's record to the history."""
+    run.epoch += 1
+    run.step_in_epoch = 0
+    run.scheduler.step()
+    record = {"epoch": float(run.epoch), **{f"train_{k}": v / max(counted, 1) for k, v in sums.items()}}
+    if val is not None:
+        record.update({f"val_{k}": v for k, v in evaluate(run.model, *val, run.stats, run.config,
+                                                           dtype=run.dtype).items()})  # fmt: skip
+    record["seconds"] = run.elapsed()
+    record = distributed.broadcast(record)  # rank 0 validated
+    run.history.append(record)
+    return record
 
 
 def _format(losses: dict[str, float], prefix: str = "") -> str:

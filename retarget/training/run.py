@@ -10,7 +10,8 @@ from pose_io.errors import InputError
 from retarget import distributed
 from retarget.checkpoint import load_weights
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
-from retarget.training.loop import CPU, ProgressFn, TrainSummary, _require_new, fit
+from retarget.training.loop import CPU, TrainSummary, fit
+from retarget.training.state import ProgressFn, require_new
 
 
 def read_real_tracks(folder: str | Path, named: bool = False) -> list:
@@ -81,7 +82,7 @@ def train(
     if resume and not out.exists():
         raise InputError(f"{out}: nothing to resume (no such checkpoint)")
     if not resume:
-        _require_new(out)
+        require_new(out)
     start = load_weights(init) if init is not None and not resume else None
     real = read_real_tracks(real_dir) if real_dir is not None else []
     with distributed.main_first():

@@ -178,7 +178,7 @@ def test_progress_is_a_callback_of_every_step_and_epoch(tmp_path):
 
 
 def test_fit_feeds_the_training_characters_proportions_to_the_skeleton_proportion_term(tmp_path, monkeypatch):
-    from retarget.training import loop
+    from retarget.training import state
 
     seen = []
 
@@ -186,7 +186,7 @@ def test_fit_feeds_the_training_characters_proportions_to_the_skeleton_proportio
         seen.append(split)
         return torch.randn(split.num_characters, 5, generator=torch.Generator().manual_seed(0))
 
-    monkeypatch.setattr(loop, "character_proportions", table)
+    monkeypatch.setattr(state, "character_proportions", table)
     train, val = FakeSplit(), FakeSplit(seed=1)
     config = dataclasses.replace(TINY, loss=dataclasses.replace(TINY.loss, skeleton_proportion_weight=1.0))
     summary = fit(train, val, tmp_path / "r.pt", config, epochs=1)
