@@ -120,29 +120,8 @@ def write_world(
     progress: Callable[[int, int, str], None] | None,
     started: float,
 ) -> None:
-    motions: list[Motion3D] = []
-    rels: list[str] = []
-    skipped: list[dict[str, str]] = []
-    for k, path in enumerate(files):
-        rel = path.relative_to(mocap_dir).as_posix()
-        if progress is not None:
-            progress(k, len(files), rel)
-        try:
-            motion = load_motion(path, fps=cfg.fps)
-        except InputError as exc:
-            log.warning("skipping %s", exc)
-            skipped.append({"path": rel, "reason": str(exc)})
-            continue
-        if motion.num_frames < cfg.window:
-            skipped.append({"path": rel, "reason": f"{motion.num_frames} frames, shorter than a window"})
-            continue
-        motions.append(motion)
-        rels.append(rel)
-    if progress is not None:
-        progress(len(files), len(files), "")
-    if not motions:
-        raise InputError(f"{mocap_dir}: no usable mocap clips ({len(skipped)} skipped)")
-
+    """Read the clips, split them, replay them on the characters and write the world's files into ``out``."""
+    motions, rels, skipped = _read_clips(mocap_dir, files, cfg, progress)
     groups = [motion_group(r) for r in rels]
     sources = [r.split("/", 1)[0] if "/" in r else "." for r in rels]
     frames = [m.num_frames for m in motions]
@@ -176,27 +155,10 @@ def write_world(
     meta: dict = {"version": WORLD_VERSION, "config": asdict(cfg), "splits": {}}
     for split in SPLITS:
         idx = [i for i, s in enumerate(split_of) if s == split]
-        clip_frames = [frames[i] for i in idx]
-        offsets = np.concatenate([[0], np.cumsum(clip_frames)[:-1]]).astype(np.int64)
-        total = int(sum(clip_frames))
         chars = characters[split]
-        # [C, F, 18, 3] written straight into the cache file, one character at a time.
-        pos = np.lib.format.open_memmap(
-            out / f"{split}_positions.npy", mode="w+", dtype=np.float32, shape=(len(chars), total, len(WORLD_JOINTS), 3)
-        )
-        src = np.lib.format.open_memmap(
-            out / f"{split}_source.npy", mode="w+", dtype=np.float32, shape=(total, len(WORLD_JOINTS), 3)
-        )
-        for k, i in enumerate(idx):
-            src[offsets[k]: offsets[k] + frames[i]] = motions[i].positions
-        for c, skel in enumerate(chars):
-            for k, i in enumerate(idx):
-                pos[c, offsets[k]: offsets[k] + frames[i]] = retarget_3d(motions[i], skel).positions
-        pos.flush()
-        src.flush()
-        del pos, src
-        windows = [(k, s) for k, i in enumerate(idx) for s in strided_starts(frames[i], cfg.window, cfg.stride)]
-        np.save(out / f"{split}_windows.npy", np.array(windows, dtype=np.int64).reshape(-1, 2))
+        offsets, windows = _write_split(out, split, [motions[i] for i in idx], chars, cfg)
+        clip_frames = [frames[i] for i in idx]
+        total = int(sum(clip_frames))
         heights = [c.height for c in chars]
         meta["splits"][split] = {
             "clips": [
@@ -212,16 +174,76 @@ def write_world(
             "clips": len(idx),
             "motions": len({groups[i] for i in idx}),
             "frames": total,
-            "windows": len(windows),
+            "windows": windows,
             "characters": len(chars),
             "views": len(VIEW_YAWS),
-            "samples": len(windows) * len(chars) * len(VIEW_YAWS),
+            "samples": windows * len(chars) * len(VIEW_YAWS),
             "height_range_m": [round(min(heights), 3), round(max(heights), 3)],
             "positions_mb": round(len(chars) * total * len(WORLD_JOINTS) * 3 * 4 / 2**20, 1),
         }
     summary["build_seconds"] = round(time.perf_counter() - started, 1)
     meta["summary"] = summary
     (out / "meta.json").write_text(json.dumps(meta, indent=1))
+
+
+def _read_clips(
+    mocap_dir: Path, files: list[Path], cfg: WorldConfig, progress: Callable[[int, int, str], None] | None
+) -> tuple[list[Motion3D], list[str], list[dict[str, str]]]:
+    """The usable clips at the world's frame rate, their paths relative to ``mocap_dir``, and the skipped files
+    with the reason (unreadable, or shorter than a window). InputError when none is usable."""
+    motions: list[Motion3D] = []
+    rels: list[str] = []
+    skipped: list[dict[str, str]] = []
+    for k, path in enumerate(files):
+        rel = path.relative_to(mocap_dir).as_posix()
+        if progress is not None:
+            progress(k, len(files), rel)
+        try:
+            motion = load_motion(path, fps=cfg.fps)
+        except InputError as exc:
+            log.warning("skipping %s", exc)
+            skipped.append({"path": rel, "reason": str(exc)})
+            continue
+        if motion.num_frames < cfg.window:
+            skipped.append({"path": rel, "reason": f"{motion.num_frames} frames, shorter than a window"})
+            continue
+        motions.append(motion)
+        rels.append(rel)
+    if progress is not None:
+        progress(len(files), len(files), "")
+    if not motions:
+        raise InputError(f"{mocap_dir}: no usable mocap clips ({len(skipped)} skipped)")
+    return motions, rels, skipped
+
+
+def _write_split(out: Path, split: str, motions: list[Motion3D], chars: list[Skeleton], cfg: WorldConfig
+                 ) -> tuple[np.ndarray, int]:
+    """Write one split's arrays: the source clips, every clip replayed on every character, the window starts.
+
+    Returns:
+        The clips' first frames in the concatenated frames [clips] int64, and the number of windows.
+    """
+    frames = [m.num_frames for m in motions]
+    offsets = np.concatenate([[0], np.cumsum(frames)[:-1]]).astype(np.int64)
+    total = int(sum(frames))
+    # [C, F, 18, 3] written straight into the cache file, one character at a time.
+    pos = np.lib.format.open_memmap(
+        out / f"{split}_positions.npy", mode="w+", dtype=np.float32, shape=(len(chars), total, len(WORLD_JOINTS), 3)
+    )
+    src = np.lib.format.open_memmap(
+        out / f"{split}_source.npy", mode="w+", dtype=np.float32, shape=(total, len(WORLD_JOINTS), 3)
+    )
+    for k, motion in enumerate(motions):
+        src[offsets[k]: offsets[k] + frames[k]] = motion.positions
+    for c, skel in enumerate(chars):
+        for k, motion in enumerate(motions):
+            pos[c, offsets[k]: offsets[k] + frames[k]] = retarget_3d(motion, skel).positions
+    pos.flush()
+    src.flush()
+    del pos, src
+    windows = [(k, s) for k, n in enumerate(frames) for s in strided_starts(n, cfg.window, cfg.stride)]
+    np.save(out / f"{split}_windows.npy", np.array(windows, dtype=np.int64).reshape(-1, 2))
+    return offsets, len(windows)
 
 
 __all__ = ["assign_splits", "find_mocap_files", "make_characters", "motion_group", "write_world"]
