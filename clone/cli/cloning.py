@@ -1,7 +1,8 @@
-"""`clone train-ref` and `clone drive`: performance cloning with a pose-to-frame generator.
+"""`clone train-ref`, `clone drive` and `clone strip`: performance cloning with a pose-to-frame generator.
 
     clone train-ref ref_poses/ frames/          # writes ./ref_model.pt (+ ref_model.preview.png)
     clone drive drive_poses/ --out out.mp4      # reads ./ref_model.pt
+    clone strip ref_model.pt --out small.pt     # the same model without its resume state, to drive elsewhere
 
 torch and the video libraries are imported inside the commands so that `clone --help` stays fast.
 """
@@ -222,3 +223,20 @@ def drive(
                       "(--stage raw keeps them there)")
     if result.poses_out is not None:
         console.print(f"wrote {result.poses_out}")
+
+
+@user_errors
+def strip(
+    model: Annotated[Path, typer.Argument(help="Reference model from `clone train-ref`.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="The stripped model to write (.pt).")],
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Replace an existing --out (MODEL itself too: it then loses its resume state).")] = False,
+) -> None:
+    """Write MODEL without what only --resume reads (discriminator, optimisers, random state): it drives the same."""
+    from clone.outputs import check_output
+    from clone.train_ref.checkpoint import write_stripped
+
+    check_output(out, "--out", suffixes=(".pt",), overwrite=overwrite)
+    written, before, after = write_stripped(model, out, overwrite=overwrite)
+    console.print(f"wrote {written}: {after / 2**20:.1f} MB (was {before / 2**20:.1f} MB); it drives as {model} "
+                  "does and cannot be resumed")

@@ -53,6 +53,7 @@ def _root(
 # commands, so registering them here keeps `clone --help` fast).
 app.command("train-ref")(cloning.train_ref)
 app.command("drive")(cloning.drive)
+app.command("strip")(cloning.strip)
 app.command("report")(report_command)
 app.command("demo")(demo_command)
 app.command("cartoon")(cartoon_command)

@@ -32,6 +32,8 @@ from retarget.global_scale import ScaleStats
 
 # Entries of ``training`` without which a model cannot be resumed.
 RESUME_KEYS = ("config", "trainer", "rng")
+# The entries only resuming reads (the rest is the run's record: steps, seconds, device, config).
+RESUME_STATE = ("trainer", "rng")
 
 
 @dataclass(frozen=True)
@@ -153,3 +155,29 @@ def restore(trainer: Trainer, rng: torch.Generator, model: ReferenceModel, path:
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else exc.__class__.__name__
         raise InputError(f"{path}: damaged training state ({first[:120]}); cannot resume") from None
+
+
+def strip_resume_state(model: ReferenceModel) -> ReferenceModel:
+    """The model without what only resuming reads (the discriminator, both optimisers, the random state): it
+    drives exactly as before and cannot be resumed. The run's record (steps, seconds, device, config) stays."""
+    if model.training is None:
+        return model
+    record = {k: v for k, v in model.training.items() if k not in RESUME_STATE}
+    return replace(model, training=record or None)
+
+
+def write_stripped(path: str | os.PathLike, out: str | os.PathLike, overwrite: bool = False) -> tuple[Path, int, int]:
+    """Write the model at ``path`` without its resume state to ``out`` (atomically; ``out`` may be ``path`` itself
+    with ``overwrite``).
+
+    Returns:
+        ``out``, and the sizes in bytes of the model before and after.
+
+    Raises:
+        InputError: ``path`` is not a readable reference model, or ``out`` exists without ``overwrite``.
+    """
+    path, out = Path(path), Path(out)
+    model = load_reference_model(path)
+    before = path.stat().st_size
+    save_reference_model(strip_resume_state(model), out, overwrite=overwrite)
+    return out, before, out.stat().st_size

@@ -258,6 +258,13 @@ options("report", [*REPORT, "--model", "{t}/foreign.pt"], [b.poses_npz, b.foreig
 add("report missing driver", ["report", "{t}/missing.npz", "--out", "{t}/rep", "--model", "{t}/foreign.pt"],
     [b.foreign_pt])
 
+STRIP = ["strip", "{t}/foreign.pt", "--out", "{t}/small.pt"]
+for path, builder in BAD_MODELS.items():
+    add(f"strip MODEL={path.replace('{t}/', '')}", ["strip", path, "--out", "{t}/small.pt"], [builder] if builder else [])
+paths("strip", STRIP[:2], [b.foreign_pt, *EVERY_OUTPUT], "--out",
+      ["{t}/small.npz", "{t}/old.pt", "{t}/olddir", "{t}/blocker/s.pt", "{t}/foreign.pt"])
+add("strip no --out", ["strip", "{t}/foreign.pt"], [b.foreign_pt])
+
 # ------------------------------------------------------------------------------------------------ demo
 
 DEMO = ["demo", "--out", "{t}/demo", "--device", "cpu"]

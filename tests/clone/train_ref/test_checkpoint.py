@@ -113,3 +113,44 @@ def test_damaged_training_state_is_one_clear_error(reference, tmp_path):
     raw["training"]["trainer"]["opt_g"] = {}
     torch.save(raw, out)
     assert "damaged training state" in one_line_error(CliRunner().invoke(app, resume_args(poses, frames, out, 5)))
+
+
+def test_strip_keeps_everything_that_drives_and_drops_what_only_resuming_reads(reference, tmp_path):
+    poses, frames = reference
+    out, small = tmp_path / "ref.pt", tmp_path / "small.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, out)).exit_code == 0
+    before = out.read_bytes()
+    result = CliRunner().invoke(app, ["strip", str(out), "--out", str(small)])
+    assert result.exit_code == 0, result.output
+    assert f"wrote {small}" in result.output and "cannot be resumed" in result.output
+    assert out.read_bytes() == before and small.stat().st_size < out.stat().st_size
+    full, stripped = load_reference_model(out), load_reference_model(small)
+    assert set(stripped.training) == {"steps", "seconds", "config", "device"}  # the run's record stays
+    assert {k: stripped.training[k] for k in ("steps", "config")} == {k: full.training[k] for k in ("steps", "config")}
+    assert_same_generator(full, stripped)
+    for field in ("generator_name", "generator_config", "canvas", "codes_weights", "codes_weights_path", "temporal"):
+        assert getattr(stripped, field) == getattr(full, field), field
+    for field in ("scale_stats", "track_summary"):  # hold arrays
+        assert repr(getattr(stripped, field)) == repr(getattr(full, field)), field
+    assert stripped.plate.tobytes() == full.plate.tobytes()
+    assert stripped.reference_track.joints.tobytes() == full.reference_track.joints.tobytes()
+    assert str(stripped.reference_codes) == str(full.reference_codes)
+    assert "no training state" in one_line_error(CliRunner().invoke(app, resume_args(poses, frames, small, 5)))
+    assert not list(tmp_path.glob(".*small*"))  # no temporary file left
+
+
+def test_strip_never_replaces_a_file_unasked(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "ref.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, out)).exit_code == 0
+    before = out.read_bytes()
+    for target in (out, tmp_path / "ref.pt"):
+        assert "already exists" in one_line_error(CliRunner().invoke(app, ["strip", str(out), "--out", str(target)]))
+    assert out.read_bytes() == before
+    assert CliRunner().invoke(app, ["strip", str(out), "--out", str(out), "--overwrite"]).exit_code == 0
+    assert out.stat().st_size < len(before) and "trainer" not in load_reference_model(out).training
+    again = CliRunner().invoke(app, ["strip", str(out), "--out", str(tmp_path / "again.pt")])
+    assert again.exit_code == 0  # a stripped model strips to itself
+    twice = load_reference_model(tmp_path / "again.pt")
+    assert set(twice.training) == set(load_reference_model(out).training)
+    assert_same_generator(load_reference_model(out), twice)
