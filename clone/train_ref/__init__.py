@@ -23,8 +23,8 @@ The result is ONE reference-model file (see :mod:`clone.reference_model`) holdin
 
 Modules, one job each: :mod:`.config` (settings), :mod:`.data` (reading the reference, frame store, batches),
 :mod:`.augment` (random warps, the degraded previous frame), :mod:`.trainer` (networks, losses, one step),
-:mod:`.checkpoint` (the model file with its training state), :mod:`.preview` (preview images) and
-:mod:`.loop` (:func:`train_reference`).
+:mod:`.checkpoint` (the model file with its training state), :mod:`.preview` (preview images), :mod:`.state`
+(where a run starts, what its steps share) and :mod:`.loop` (:func:`train_reference`).
 """
 
 from clone.train_ref.augment import degrade_previous, random_affines, warp_batch
@@ -40,8 +40,9 @@ from clone.train_ref.data import (
     track_summary,
     usable_frames,
 )
-from clone.train_ref.loop import ProgressFn, TrainProgress, TrainResult, train_reference
+from clone.train_ref.loop import TrainResult, train_reference
 from clone.train_ref.preview import preview_grid, preview_rows, write_png
+from clone.train_ref.state import ProgressFn, TrainProgress
 from clone.train_ref.trainer import Trainer
 
 __all__ = [

@@ -18,8 +18,7 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -29,7 +28,7 @@ import torch
 from clone.canvas import choose_canvas, cut_frame, image_to_canvas
 from clone.reference_model import ReferenceModel, preview_path
 from clone.train_ref.augment import random_affines, warp_batch
-from clone.train_ref.checkpoint import ReferenceInfo, load_resumable, restore, resume_config, save_checkpoint
+from clone.train_ref.checkpoint import ReferenceInfo
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import (
     ReferenceData,
@@ -42,7 +41,14 @@ from clone.train_ref.data import (
     usable_frames,
 )
 from clone.train_ref.preview import preview_grid, preview_rows, write_png
-from clone.train_ref.trainer import Trainer
+from clone.train_ref.state import (
+    ProgressFn,
+    TrainingRun,
+    TrainProgress,
+    check_options,
+    previous_and_config,
+    start_run,
+)
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget import distributed
@@ -68,54 +74,6 @@ class TrainResult:
     has_codes: bool
     interrupted: bool
     last_losses: dict[str, float]
-
-
-@dataclass
-class TrainProgress:
-    """Where a run stands, passed to the progress callback after every step (and every frame read).
-
-    While ``phase`` is ``"reading"``, ``step`` counts frames read out of ``total``.
-    """
-
-    phase: str
-    step: int
-    total: int | None
-    elapsed: float
-    limit_s: float | None
-    losses: dict[str, float]
-
-
-ProgressFn = Callable[[TrainProgress], None]
-
-
-@dataclass
-class _Run:
-    """A run in progress: what steps, checkpoints and progress reports share."""
-
-    out: Path
-    trainer: Trainer
-    reference: ReferenceInfo
-    config: TrainConfig
-    rng: torch.Generator  # CPU: picks samples and draws the augmentation
-    seconds_before: float  # training time of earlier runs of this model
-    progress: ProgressFn | None
-    started: float = 0.0  # time.perf_counter() when stepping began
-    world: distributed.World = field(default_factory=distributed.World)
-    part: slice | None = None  # this process's samples of each global batch (None: all)
-
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.started
-
-    def save(self) -> None:
-        """Rank 0 writes the model file (nothing in it depends on the number of processes); all wait for it."""
-        if self.world.is_main:
-            save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng,
-                            self.seconds_before + self.elapsed())
-        distributed.barrier()
-
-    def report(self, progress: TrainProgress) -> None:
-        if self.progress is not None and self.world.is_main:
-            self.progress(progress)
 
 
 def train_reference(
@@ -162,8 +120,8 @@ def train_reference(
             of processes.
     """
     out = Path(out)
-    _check_options(resume, overwrite, steps, minutes)
-    previous, config = _previous_and_config(out, config, resume, overwrite)
+    check_options(resume, overwrite, steps, minutes)
+    previous, config = previous_and_config(out, config, resume, overwrite)
     world = distributed.current()
     try:
         part = distributed.shard(config.batch_size, world)
@@ -175,7 +133,7 @@ def train_reference(
     usable = _usable(track, config.min_visible_joints, poses_path, count)
     reference = _reference_info(track, usable, config, previous, frames_path, weights)
     device = torch.device(device)
-    run = _start_run(out, reference, config, device, previous, progress, distributed.amp_dtype(device, amp))
+    run = start_run(out, reference, config, device, previous, progress, distributed.amp_dtype(device, amp))
     run.world, run.part = world, part
     start_step = run.trainer.step_count
 
@@ -204,28 +162,6 @@ def train_reference(
         usable_frames=int(usable.sum()), skipped_frames=int((~usable).sum()), has_codes=reference.codes is not None,
         interrupted=interrupted, last_losses=losses,
     )
-
-
-def _check_options(resume: bool, overwrite: bool, steps: int | None, minutes: float | None) -> None:
-    if resume and overwrite:
-        raise InputError("--resume and --overwrite exclude each other")
-    if steps is not None and steps < 1:
-        raise InputError(f"--steps must be >= 1, got {steps}")
-    if minutes is not None and not minutes > 0:
-        raise InputError(f"--minutes must be positive, got {minutes}")
-
-
-def _previous_and_config(
-    out: Path, given: TrainConfig | None, resume: bool, overwrite: bool
-) -> tuple[ReferenceModel | None, TrainConfig]:
-    """The model being resumed (None for a new one) and the run's config."""
-    if resume:
-        previous = load_resumable(out)
-        return previous, resume_config(previous, given, out)
-    if out.exists() and not overwrite:
-        raise InputError(f"{out}: already exists; pass --resume to continue it, --overwrite to replace "
-                         "it, or choose another --out")
-    return None, given or TrainConfig()
 
 
 def _usable(track: PoseTrack, min_visible: int, poses_path: str | os.PathLike, count: int) -> np.ndarray:
@@ -259,23 +195,7 @@ def _reference_info(
     return ReferenceInfo(canvas, maybe_scale_stats(track), track, summary, codes, codes_weights, codes_path)
 
 
-def _start_run(
-    out: Path, reference: ReferenceInfo, config: TrainConfig, device: torch.device,
-    previous: ReferenceModel | None, progress: ProgressFn | None, dtype: torch.dtype | None = None,
-) -> _Run:
-    """Seeded networks and random generator, restored from ``previous`` when resuming."""
-    torch.manual_seed(config.seed)
-    generator = previous.build_generator(device).train() if previous is not None else None
-    trainer = Trainer(config, device, generator, dtype)
-    rng = torch.Generator().manual_seed(config.seed)
-    seconds_before = 0.0
-    if previous is not None:
-        restore(trainer, rng, previous, out)
-        seconds_before = float(previous.training.get("seconds", 0.0))
-    return _Run(out, trainer, reference, config, rng, seconds_before, progress, started=time.perf_counter())
-
-
-def _read_frames(run: _Run, frames: Frames, count: int, usable: np.ndarray, store: np.ndarray) -> ReferenceData:
+def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarray, store: np.ndarray) -> ReferenceData:
     """Cut the first ``count`` frames to the canvas into ``store``; the training data over them."""
     canvas = run.reference.canvas
     for i, frame in enumerate(frames):
@@ -287,7 +207,7 @@ def _read_frames(run: _Run, frames: Frames, count: int, usable: np.ndarray, stor
     return ReferenceData(store, image_to_canvas(run.reference.track.joints, canvas), usable, canvas.size)
 
 
-def _add_plate(run: _Run, data: ReferenceData, previous: ReferenceModel | None) -> None:
+def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel | None) -> None:
     """Give the run and its data the background plate when the run trains with one: a resumed model keeps
     the plate its generator learnt to composite over, a new one estimates it from the frames just read."""
     if not run.config.background:
@@ -300,7 +220,7 @@ def _add_plate(run: _Run, data: ReferenceData, previous: ReferenceModel | None) 
 
 
 def _train_steps(
-    run: _Run, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None
+    run: TrainingRun, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None
 ) -> tuple[dict[str, float], bool]:
     """Step until ``steps`` in total or ``limit_s`` seconds; returns ``(last losses, interrupted)``.
 
@@ -333,7 +253,7 @@ def _train_steps(
     return losses, False
 
 
-def _one_step(run: _Run, data: ReferenceData) -> dict[str, float]:
+def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     """One augmented batch (this process's part of it), one update of G and D; this part's mean losses.
 
     The random numbers of the whole batch are drawn on every process, each keeps those of its part.
