@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -178,23 +179,11 @@ def follow_person(detections: Detections, person: int | None = None, gate: float
     joints = np.full((t_len, j, 2), np.nan, dtype=np.float32)
     conf = np.zeros((t_len, j), dtype=np.float32)
     chosen = np.full(t_len, -1, dtype=np.int64)
-    counts = detections.counts
-    with_people = np.flatnonzero(counts > 0)
+    with_people = np.flatnonzero(detections.counts > 0)
     if len(with_people) == 0:
         raise InputError(f"{detections.source}: no person in any frame")
     start = int(with_people[0])
-    first = detections.people[start]
-    if detections.single and person not in (None, 0):
-        raise InputError(f"{detections.source}: holds one person per frame; person {person} does not exist")
-    if person is None:
-        k = int(np.argmax([prominence(p) for p in first]))
-    elif 0 <= person < len(first):
-        k = person
-    else:
-        raise InputError(
-            f"{detections.source}: person {person} does not exist; frame {start} has {len(first)} "
-            f"{'person' if len(first) == 1 else 'people'} (0..{len(first) - 1})"
-        )
+    k = _first_person(detections, start, person)
 
     def take(t: int, i: int) -> None:
         p = detections.people[t][i]
@@ -212,39 +201,70 @@ def follow_person(detections: Detections, person: int | None = None, gate: float
         return FollowResult(joints, conf, chosen, start, ())
 
     take(start, k)
-    lost: list[int] = []
-
     if detections.ids is not None:
-        identity = detections.ids[start][k]
-        for t in with_people[1:]:
-            hits = np.flatnonzero(detections.ids[t] == identity)
-            if len(hits):
-                take(int(t), int(hits[0]))
-            else:
-                lost.append(int(t))
+        lost = _follow_ids(detections.ids, with_people, start, k, take)
     else:
-        ref_xy = np.where(np.isnan(joints[start]), 0.0, joints[start])
-        ref_known = ~np.isnan(joints[start, :, 0])
-        size = _body_size(ref_xy[ref_known], detections)
-        last = start
-        for t in with_people[1:]:
-            t = int(t)
-            dists = [pose_distance(ref_xy, ref_known, p) for p in detections.people[t]]
-            best = int(np.argmin(dists))
-            limit = gate * size * math.sqrt(t - last)
-            if dists[best] <= limit:
-                take(t, best)
-                vis = ~np.isnan(joints[t, :, 0])
-                ref_xy[vis] = joints[t, vis]
-                ref_known |= vis
-                if vis.sum() >= _MIN_SIZE_JOINTS:
-                    size = _bbox_diagonal(joints[t, vis])
-                last = t
-            else:
-                lost.append(t)
+        lost = _follow_nearest(detections, with_people, start, joints, gate, take)
     if lost:
         log.warning(
             "%s: the followed person is missing in %d of %d frames with people (first: frame %d)",
             detections.source, len(lost), len(with_people), lost[0],
         )
     return FollowResult(joints, conf, chosen, start, tuple(lost))
+
+
+def _first_person(detections: Detections, start: int, person: int | None) -> int:
+    """The index of the followed person among frame ``start``'s people: ``person``, or the most prominent."""
+    first = detections.people[start]
+    if detections.single and person not in (None, 0):
+        raise InputError(f"{detections.source}: holds one person per frame; person {person} does not exist")
+    if person is None:
+        return int(np.argmax([prominence(p) for p in first]))
+    if 0 <= person < len(first):
+        return person
+    raise InputError(
+        f"{detections.source}: person {person} does not exist; frame {start} has {len(first)} "
+        f"{'person' if len(first) == 1 else 'people'} (0..{len(first) - 1})"
+    )
+
+
+def _follow_ids(ids: tuple[np.ndarray, ...], with_people: np.ndarray, start: int, k: int,
+                take: Callable[[int, int], None]) -> list[int]:
+    """Follow the source's own person ids (``Detections.ids``) from person ``k`` of frame ``start``; the frames
+    it is missing in."""
+    identity = ids[start][k]
+    lost: list[int] = []
+    for t in with_people[1:]:
+        hits = np.flatnonzero(ids[t] == identity)
+        if len(hits):
+            take(int(t), int(hits[0]))
+        else:
+            lost.append(int(t))
+    return lost
+
+
+def _follow_nearest(detections: Detections, with_people: np.ndarray, start: int, joints: np.ndarray, gate: float,
+                    take: Callable[[int, int], None]) -> list[int]:
+    """Follow the nearest pose, frame to frame, within the gate (see the module docstring); the frames it is
+    missing in. ``joints`` [T, J, 2] holds what was taken so far (frame ``start``) and is read as it fills."""
+    ref_xy = np.where(np.isnan(joints[start]), 0.0, joints[start])
+    ref_known = ~np.isnan(joints[start, :, 0])
+    size = _body_size(ref_xy[ref_known], detections)
+    last = start
+    lost: list[int] = []
+    for t in with_people[1:]:
+        t = int(t)
+        dists = [pose_distance(ref_xy, ref_known, p) for p in detections.people[t]]
+        best = int(np.argmin(dists))
+        limit = gate * size * math.sqrt(t - last)
+        if dists[best] <= limit:
+            take(t, best)
+            vis = ~np.isnan(joints[t, :, 0])
+            ref_xy[vis] = joints[t, vis]
+            ref_known |= vis
+            if vis.sum() >= _MIN_SIZE_JOINTS:
+                size = _bbox_diagonal(joints[t, vis])
+            last = t
+        else:
+            lost.append(t)
+    return lost
