@@ -16,16 +16,23 @@ def raise_if_interrupted(exc: BaseException) -> None:
     can surface as an ordinary error, e.g. ``ImportError: initialization failed`` caused by the SystemExit. Code that
     catches ``Exception`` to fall back to a slower path calls this first, so that stopping the command still stops it.
 
+    Only a SystemExit with a signal's status (128 + the signal, as the command line's SIGTERM handler raises) counts;
+    a library's own ``sys.exit(0)`` turned into an error stays that error.
+
     Args:
         exc: the exception just caught.
 
     Raises:
-        SystemExit | KeyboardInterrupt: the interrupt found in ``exc``'s cause or context chain.
+        SystemExit | KeyboardInterrupt: the interrupt found among ``exc``'s causes and contexts.
     """
     seen: set[int] = set()
-    link = exc.__cause__ or exc.__context__
-    while link is not None and id(link) not in seen:
-        if isinstance(link, (SystemExit, KeyboardInterrupt)):
-            raise link
+    pending = [exc.__cause__, exc.__context__]
+    while pending:
+        link = pending.pop()
+        if link is None or id(link) in seen:
+            continue
         seen.add(id(link))
-        link = link.__cause__ or link.__context__
+        if isinstance(link, KeyboardInterrupt) or (
+                isinstance(link, SystemExit) and isinstance(link.code, int) and link.code >= 128):
+            raise link
+        pending += [link.__cause__, link.__context__]

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from pose_io.atomic import atomic_dir
-from pose_io.errors import InputError
+from pose_io.errors import InputError, raise_if_interrupted
 from pose_io.layouts import MEDIAPIPE33
 from pose_io.track import PoseTrack
 from pose_io.video import Frames, read_frames
@@ -82,7 +82,8 @@ def load_mediapipe_pose() -> ModuleType:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             from mediapipe.python.solutions import pose
-    except ImportError:
+    except ImportError as exc:
+        raise_if_interrupted(exc)  # a SIGTERM inside the import is not a missing package
         raise InputError(INSTALL_HINT) from None
     return pose
 

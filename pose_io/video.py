@@ -17,7 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from pose_io.errors import InputError
+from pose_io.errors import InputError, raise_if_interrupted
 from pose_io.limits import MAX_FPS, MIN_FPS, check_fps, check_image_size
 
 log = logging.getLogger(__name__)
@@ -112,7 +112,8 @@ def _header_size(path: Path) -> tuple[int, int] | None:
     """
     try:
         from PIL import Image
-    except ImportError:  # Pillow comes with matplotlib and scikit-image; without it OpenCV's own cap holds
+    except ImportError as exc:  # Pillow comes with matplotlib and scikit-image; without it OpenCV's own cap holds
+        raise_if_interrupted(exc)
         return None
     try:
         with warnings.catch_warnings():

@@ -44,8 +44,22 @@ def test_an_interrupt_inside_another_error_is_raised_again(interrupt, suppress):
     assert raised.value is interrupt
 
 
+def test_an_interrupt_behind_an_unrelated_cause_is_found():
+    stop = SystemExit(143)
+    try:
+        try:
+            raise stop
+        except SystemExit:
+            raise ImportError("initialization failed") from OSError("a cause set by the extension")
+    except ImportError as outer:
+        with pytest.raises(SystemExit) as raised:
+            raise_if_interrupted(outer)  # the interrupt is only the context
+    assert raised.value is stop
+
+
 def test_ordinary_errors_are_left_to_the_caller():
     raise_if_interrupted(ImportError("no module named onnx"))  # nothing behind it
+    raise_if_interrupted(_wrapped(SystemExit(0), suppress=False))  # a library's own exit, not a signal
     try:
         try:
             raise OSError("disk full")
