@@ -133,8 +133,8 @@ def train_reference(
     usable = _usable(track, config.min_visible_joints, poses_path, count)
     reference = _reference_info(track, usable, config, previous, frames_path, weights)
     device = torch.device(device)
-    run = start_run(out, reference, config, device, previous, progress, distributed.amp_dtype(device, amp))
-    run.world, run.part = world, part
+    run = start_run(out, reference, config, device=device, previous=previous, progress=progress, world=world,
+                    part=part, dtype=distributed.amp_dtype(device, amp))
     start_step = run.trainer.step_count
 
     # A run that fails (or is terminated) leaves no preview of a model it did not write.

@@ -55,13 +55,17 @@ class TrainingRun:
     part: slice | None = None  # this process's samples of each global batch (None: all)
 
     def elapsed(self) -> float:
+        """Seconds since this call began stepping (what --minutes counts)."""
         return time.perf_counter() - self.started
+
+    def total_seconds(self) -> float:
+        """Seconds of training over all calls of this model."""
+        return self.seconds_before + self.elapsed()
 
     def save(self) -> None:
         """Rank 0 writes the model file (nothing in it depends on the number of processes); all wait for it."""
         if self.world.is_main:
-            save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng,
-                            self.seconds_before + self.elapsed())
+            save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng, self.total_seconds())
         distributed.barrier()
 
     def report(self, progress: TrainProgress) -> None:
@@ -93,10 +97,23 @@ def previous_and_config(
 
 
 def start_run(
-    out: Path, reference: ReferenceInfo, config: TrainConfig, device: torch.device,
-    previous: ReferenceModel | None, progress: ProgressFn | None, dtype: torch.dtype | None = None,
+    out: Path, reference: ReferenceInfo, config: TrainConfig, *, device: torch.device,
+    previous: ReferenceModel | None, progress: ProgressFn | None, world: distributed.World, part: slice | None,
+    dtype: torch.dtype | None = None,
 ) -> TrainingRun:
-    """Seeded networks and random generator, restored from ``previous`` when resuming."""
+    """Seeded networks and random generator, restored from ``previous`` when resuming.
+
+    Args:
+        out: the model file.
+        reference: what the model stores about the reference.
+        config: the run's settings.
+        device: where to train.
+        previous: the model being resumed, or None.
+        progress: the progress callback (rank 0 only).
+        world: this process's place in the process group.
+        part: this process's samples of each global batch (None: all).
+        dtype: autocast dtype, or None.
+    """
     torch.manual_seed(config.seed)
     generator = previous.build_generator(device).train() if previous is not None else None
     trainer = Trainer(config, device, generator, dtype)
@@ -105,4 +122,6 @@ def start_run(
     if previous is not None:
         restore(trainer, rng, previous, out)
         seconds_before = float(previous.training.get("seconds", 0.0))
-    return TrainingRun(out, trainer, reference, config, rng, seconds_before, progress, started=time.perf_counter())
+    return TrainingRun(out=out, trainer=trainer, reference=reference, config=config, rng=rng,
+                       seconds_before=seconds_before, progress=progress, started=time.perf_counter(), world=world,
+                       part=part)

@@ -195,6 +195,8 @@ def real_windows(tracks: Sequence[PoseTrack], length: int, preprocess: Preproces
 def validation_set(
     split: WorldSplit, config: TrainConfig, scales: np.ndarray | None
 ) -> tuple[torch.Tensor, torch.Tensor] | None:
+    """The fixed validation samples of a run: ``config.val_samples`` cross samples of ``split`` (seed + 1) as
+    ``(windows [N, 8, T, 15, 2], ids [N, 2, 3])``; None when the split has fewer than two motions."""
     if split.num_motions < 2:
         log.warning("validation split has fewer than 2 motions; no validation")
         return None

@@ -132,8 +132,9 @@ def fit(
     except ValueError as exc:
         raise InputError(str(exc)) from None
     begin = begin_run(train_split, out, config, resume, init)
-    run = start_run(begin, train_split, out, config, dev, amp, real_tracks, average, average_from, progress, world,
-                     part, deadline, started)  # fmt: skip
+    run = start_run(begin, train_split, out, config, device=dev, amp=amp, real_tracks=real_tracks, average=average,
+                    average_from=average_from, progress=progress, world=world, part=part, deadline=deadline,
+                    started=started)  # fmt: skip
     dataset = CrossSamples(
         train_split, config.window, config.variant, config.samples_per_epoch, config.seed, begin.scales,
         config.cameras, run.preprocess.body_height, config.frontal_share,
@@ -230,7 +231,7 @@ def _close_epoch(run: TrainingRun, sums: dict[str, float], counted: int,
     if val is not None:
         record.update({f"val_{k}": v for k, v in evaluate(run.model, *val, run.stats, run.config,
                                                            dtype=run.dtype).items()})  # fmt: skip
-    record["seconds"] = run.elapsed()
+    record["seconds"] = run.total_seconds()
     record = distributed.broadcast(record)  # rank 0 validated
     run.history.append(record)
     return record

@@ -72,7 +72,19 @@ class RunStart(NamedTuple):
 
 def begin_run(train_split: WorldSplit, out: Path, config: TrainConfig, resume: bool, init: RetargetWeights | None
            ) -> RunStart:
-    """The stored run (``resume``), the given weights (``init``) or a new seeded network, with what goes with it."""
+    """The stored run (``resume``), the given weights (``init``) or a new seeded network, with what goes with it.
+
+    Args:
+        train_split: the training split (its characters' heights set a new run's body height and scales).
+        out: the checkpoint file: read with ``resume``, else it must not exist.
+        config: the run's settings; a resumed run must have been trained with the same.
+        resume: continue the run stored in ``out``.
+        init: weights to start a new run from (their statistics are kept), or None.
+
+    Raises:
+        InputError: ``out`` exists without ``resume``, holds no run or one with other settings, or ``init`` is
+            another variant.
+    """
     if resume:
         state = resume_state(out, config)
         preprocess = state["preprocess"]
@@ -114,7 +126,7 @@ class TrainingRun:
     scheduler: torch.optim.lr_scheduler.LRScheduler
     generator: torch.Generator  # draws the augmentation
     real_rng: np.random.Generator  # picks each step's real windows
-    real: torch.Tensor | None  # [N, 30, window] real windows, or None
+    real: torch.Tensor | None  # [N, window, 15, 2] real windows in the canvas, or None
     averager: WeightAverage | None
     dtype: torch.dtype | None  # autocast
     device: torch.device
@@ -131,8 +143,12 @@ class TrainingRun:
     history: list[dict[str, float]] = field(default_factory=list)
 
     def elapsed(self) -> float:
+        """Seconds since this call began."""
+        return time.monotonic() - self.started
+
+    def total_seconds(self) -> float:
         """Seconds of training over all calls of this run."""
-        return self.seconds_before + time.monotonic() - self.started
+        return self.seconds_before + self.elapsed()
 
     def save(self) -> None:
         """Rank 0 rewrites the checkpoint (nothing in it depends on the number of processes); all wait for it."""
@@ -142,22 +158,39 @@ class TrainingRun:
                 "step": self.step_in_epoch, "global_step": self.global_step,
                 "optimizer": self.optimizer.state_dict(), "scheduler": self.scheduler.state_dict(),
                 "torch_rng": torch.get_rng_state(), "augment_rng": self.generator.get_state(),
-                "real_rng": self.real_rng.bit_generator.state, "elapsed_s": self.elapsed(), "history": self.history,
+                "real_rng": self.real_rng.bit_generator.state, "elapsed_s": self.total_seconds(), "history": self.history,
                 **({"average": self.averager.state()} if self.averager is not None else {}),
             })
         distributed.barrier()
 
     def report(self, update: TrainProgress) -> None:
+        """Hand ``update`` to the progress callback, on rank 0 only."""
         if self.progress is not None and self.world.is_main:
             self.progress(update)
 
 
 def start_run(
-    begin: RunStart, train_split: WorldSplit, out: Path, config: TrainConfig, device: torch.device, amp: bool | None,
-    real_tracks: Sequence[PoseTrack], average: str | Path | None, average_from: int | None,
+    begin: RunStart, train_split: WorldSplit, out: Path, config: TrainConfig, *, device: torch.device,
+    amp: bool | None, real_tracks: Sequence[PoseTrack], average: str | Path | None, average_from: int | None,
     progress: ProgressFn | None, world: distributed.World, part: slice, deadline: float, started: float,
 ) -> TrainingRun:
-    """The optimiser, schedule, random generators and weight average of a run, restored when it resumes."""
+    """The optimiser, schedule, random generators and weight average of a run, restored when it resumes.
+
+    Args:
+        begin: what the run starts from (:func:`begin_run`).
+        train_split: the training split (its characters' proportions feed the proportion term).
+        out: the checkpoint file.
+        config: the run's settings.
+        device: where to train.
+        amp: bfloat16 autocast on CUDA (None: where supported).
+        real_tracks: unlabelled real tracks for the self-reconstruction term.
+        average, average_from: see :func:`retarget.training.loop.fit`.
+        progress: the progress callback (rank 0 only).
+        world: this process's place in the process group.
+        part: this process's samples of each global batch.
+        deadline: ``time.monotonic()`` when the time budget ends.
+        started: ``time.monotonic()`` when this call began.
+    """
     model = begin.model.to(device)
     proportions = character_proportions(train_split).to(device) if config.loss.skeleton_proportion_weight > 0 else None
     step_loss = distributed.wrap(TrainLoss(model, begin.stats, config, proportions), device)
@@ -176,10 +209,12 @@ def start_run(
     done = training or {}
     real = torch.from_numpy(real_windows(real_tracks, config.window, begin.preprocess)) if real_tracks else None
     return TrainingRun(
-        out, config, model, begin.stats, begin.preprocess, begin.init_from, step_loss, optimizer, scheduler,
-        generator, real_rng, real, weight_average(model, done, average, average_from), dtype, device, part,
-        max(1, config.samples_per_epoch // config.batch_size), deadline, started, progress, world,
-        epoch=done.get("epoch", 0), step_in_epoch=done.get("step", 0), global_step=done.get("global_step", 0),
+        out=out, config=config, model=model, stats=begin.stats, preprocess=begin.preprocess,
+        init_from=begin.init_from, step_loss=step_loss, optimizer=optimizer, scheduler=scheduler, generator=generator,
+        real_rng=real_rng, real=real, averager=weight_average(model, done, average, average_from), dtype=dtype,
+        device=device, part=part, steps_per_epoch=max(1, config.samples_per_epoch // config.batch_size),
+        deadline=deadline, started=started, progress=progress, world=world, epoch=done.get("epoch", 0),
+        step_in_epoch=done.get("step", 0), global_step=done.get("global_step", 0),
         seconds_before=done.get("elapsed_s", 0.0), history=list(done.get("history", [])),
     )
 
