@@ -52,6 +52,10 @@ def write_track(track: PoseTrack, path: str | os.PathLike, fmt: str | None = Non
 
     Returns:
         ``path``.
+
+    Raises:
+        InputError: an unknown format, an existing ``path`` without ``overwrite``, or a track with no visible joint
+            in any frame (every reader refuses such a file: "no person in any frame").
     """
     path = Path(path)
     fmt = output_format(path) if fmt is None else fmt
@@ -59,6 +63,8 @@ def write_track(track: PoseTrack, path: str | os.PathLike, fmt: str | None = Non
         writer = WRITERS[fmt]
     except KeyError:
         raise InputError(f"unknown output pose format {fmt!r}; valid: {', '.join(sorted(WRITERS))}") from None
+    if track.missing.all():
+        raise InputError(f"{path}: nothing to write: no frame of the track shows a joint")
     writer(track, path, overwrite)
     log.info("wrote %s (%d frames, %s)", path, track.num_frames, fmt)
     return path

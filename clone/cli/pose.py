@@ -172,6 +172,7 @@ def convert(
     """
     from clone.outputs import FOLDER, check_number, check_output
     from pose_io import clean
+    from pose_io.errors import InputError
     from pose_io.resample import resample
     from pose_io.writers import write_track
 
@@ -192,6 +193,11 @@ def convert(
         track = resample(track, fps)
     if to_layout is not None:
         track = track.to_layout(to_layout.value)
+    if track.missing.all():  # the input had joints (the reader checked): the steps above lost them all
+        steps = [f"--fps {fps:g} keeps {track.num_frames} frame(s)" if fps is not None else "",
+                 f"--to-layout {to_layout.value}" if to_layout is not None else ""]
+        raise InputError(f"{dst}: nothing to write: no frame of the result shows a joint "
+                         f"({'; '.join(s for s in steps if s) or 'after cleaning'})")
     write_track(track, dst, fmt=to.value if to is not None else None, overwrite=overwrite)
     typer.echo(f"wrote {dst} ({track.num_frames} frames, {track.layout}, {track.fps:g} fps, "
                f"{track.image_size[0]}x{track.image_size[1]})")

@@ -92,6 +92,23 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, walking_track, args,
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+def test_convert_that_resamples_every_person_away_is_one_error_and_writes_nothing(tmp_path):
+    """Found by the 10,000-example fuzz: two frames at 30 fps, the person only in the second; at 10 fps the one frame
+    left is the empty first one, which was written and could not be read back."""
+    folder = tmp_path / "clip"
+    folder.mkdir()
+    person = np.c_[np.random.default_rng(0).uniform(100, 400, (25, 2)), np.full(25, 0.8)].ravel().tolist()
+    for t, people in enumerate([[], [{"pose_keypoints_2d": person}]]):
+        (folder / f"c_{t:012d}_keypoints.json").write_text(json.dumps({"version": 1.3, "people": people}))
+    for out in ("out.csv", "out.npz", "outdir"):
+        result = invoke("pose", "convert", folder, tmp_path / out, "--fps", "10")
+        lines = [line for line in result.output.splitlines() if line.strip()]
+        assert result.exit_code == 2 and len(lines) == 1, result.output
+        assert "nothing to write" in lines[0] and "--fps 10 keeps 1 frame(s)" in lines[0]
+        assert not (tmp_path / out).exists()
+    assert invoke("pose", "convert", folder, tmp_path / "ok.csv", "--fps", "30").exit_code == 0
+
+
 def test_convert_chain(tmp_path, walking_track):
     joints = walking_track.joints.copy()
     joints[10:12, 4] = np.nan

@@ -81,6 +81,15 @@ def test_negative_coordinates_refused_for_openpose_and_nothing_written(tmp_path,
     assert read_track(write_track(track, tmp_path / "out.npz")).equals(track)
 
 
+@pytest.mark.parametrize("name", ["a.npz", "a.csv", "folder"])
+def test_a_track_without_a_visible_joint_is_not_written(tmp_path, walking_track, name):
+    empty = walking_track.replace(joints=np.full_like(walking_track.joints, np.nan),
+                                  confidence=np.zeros_like(walking_track.confidence))
+    with pytest.raises(InputError, match="nothing to write: no frame of the track shows a joint"):
+        write_track(empty, tmp_path / name)  # no reader would take it back ("no person in any frame")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_unknown_output_types(tmp_path, walking_track):
     with pytest.raises(InputError, match="cannot write pose files of type .json"):
         write_track(walking_track, tmp_path / "a.json")
@@ -122,7 +131,8 @@ def test_writers_compute_the_missing_mask_once_not_per_cell(tmp_path, monkeypatc
     track = long_track(500)
     calls = count_missing_calls(monkeypatch)
     write_track(track, tmp_path / name)
-    assert calls[0] <= 1, f"{name}: PoseTrack.missing read {calls[0]} times for {track.num_frames} frames"
+    # At most twice (write_track's check for a track with no visible joint, and the writer's own), never per cell.
+    assert calls[0] <= 2, f"{name}: PoseTrack.missing read {calls[0]} times for {track.num_frames} frames"
 
 
 def test_100k_frame_npz_converts_to_csv(tmp_path, monkeypatch):
