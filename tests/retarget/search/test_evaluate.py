@@ -5,20 +5,6 @@ from __future__ import annotations
 import pytest
 
 
-@pytest.fixture(scope="module")
-def tiny_world(tmp_path_factory: pytest.TempPathFactory):
-    """A motion world of four humanoid clips written here (see tests/retarget/world/humanoid.py)."""
-    from retarget.world import MotionWorld
-    from tests.retarget.world.humanoid import write_clip
-
-    root = tmp_path_factory.mktemp("mocap")
-    (root / "bandai").mkdir()
-    for name in ("walk_normal_001", "bow_normal_001", "run_normal_001", "walk_fast_001"):
-        write_clip(root / "bandai" / f"dataset-1_{name}.bvh.gz")
-    return MotionWorld.build(root, tmp_path_factory.mktemp("cache"), n_train_characters=2, n_val_characters=2,
-                             n_test_characters=2)  # fmt: skip
-
-
 def test_retrieval_evaluation_on_a_tiny_world(encoder, tiny_world):
     from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table
 

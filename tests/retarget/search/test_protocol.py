@@ -22,18 +22,9 @@ FPS = 30.0
 
 
 @pytest.fixture(scope="module")
-def split(tmp_path_factory: pytest.TempPathFactory):
-    """The test split of a motion world of four humanoid clips (see tests/retarget/world/humanoid.py)."""
-    from retarget.world import MotionWorld
-    from tests.retarget.world.humanoid import write_clip
-
-    root = tmp_path_factory.mktemp("mocap")
-    (root / "bandai").mkdir()
-    for name in ("walk_normal_001", "bow_normal_001", "run_normal_001", "walk_fast_001"):
-        write_clip(root / "bandai" / f"dataset-1_{name}.bvh.gz")
-    world = MotionWorld.build(root, tmp_path_factory.mktemp("cache"), n_train_characters=2, n_val_characters=2,
-                              n_test_characters=2)  # fmt: skip
-    return world.split("test")
+def split(tiny_world):
+    """The test split of the package's tiny motion world."""
+    return tiny_world.split("test")
 
 
 def _draw(split, config: RetrievalEvalConfig):
