@@ -33,8 +33,8 @@ def cpu_times(cores: set[int], path: str = PROC_STAT) -> tuple[int, int] | None:
                 name, *fields = line.split()
                 if not name.startswith("cpu") or not name[3:].isdigit() or int(name[3:]) not in cores:
                     continue
-                ticks = [int(v) for v in fields[:8]] + [0] * (8 - len(fields[:8]))
-                user, nice, system, idle, iowait, irq, softirq, steal = ticks
+                ticks = [int(v) for v in fields[:8]]
+                user, nice, system, idle, iowait, irq, softirq, steal = ticks + [0] * (8 - len(ticks))
                 busy += user + nice + system + irq + softirq + steal
                 total += user + nice + system + idle + iowait + irq + softirq + steal
                 seen += 1

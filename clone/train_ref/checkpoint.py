@@ -30,10 +30,10 @@ from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.global_scale import ScaleStats
 
-# Entries of ``training`` without which a model cannot be resumed.
-RESUME_KEYS = ("config", "trainer", "rng")
-# The entries only resuming reads (the rest is the run's record: steps, seconds, device, config).
+# The entries of ``training`` only resuming reads (the rest is the run's record: steps, seconds, device, config).
 RESUME_STATE = ("trainer", "rng")
+# Entries of ``training`` without which a model cannot be resumed.
+RESUME_KEYS = ("config", *RESUME_STATE)
 
 
 @dataclass(frozen=True)

@@ -69,6 +69,7 @@ class TrainingRun:
         distributed.barrier()
 
     def report(self, progress: TrainProgress) -> None:
+        """Hand ``progress`` to the progress callback, on rank 0 only."""
         if self.progress is not None and self.world.is_main:
             self.progress(progress)
 

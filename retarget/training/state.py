@@ -70,8 +70,9 @@ class RunStart(NamedTuple):
     training: dict[str, Any] | None
 
 
-def begin_run(train_split: WorldSplit, out: Path, config: TrainConfig, resume: bool, init: RetargetWeights | None
-           ) -> RunStart:
+def begin_run(
+    train_split: WorldSplit, out: Path, config: TrainConfig, resume: bool, init: RetargetWeights | None
+) -> RunStart:
     """The stored run (``resume``), the given weights (``init``) or a new seeded network, with what goes with it.
 
     Args:
@@ -86,11 +87,10 @@ def begin_run(train_split: WorldSplit, out: Path, config: TrainConfig, resume: b
             another variant.
     """
     if resume:
-        state = resume_state(out, config)
-        preprocess = state["preprocess"]
-        scales = body_scales(train_split, config, preprocess.body_height)
-        training = state["training"]
-        return RunStart(state["model"], state["stats"], preprocess, scales, training.get("init"), training)
+        stored = _stored_run(out, config)
+        scales = body_scales(train_split, config, stored.preprocess.body_height)
+        return RunStart(stored.model, stored.stats, stored.preprocess, scales, stored.training.get("init"),
+                        stored.training)
     require_new(out)
     torch.manual_seed(config.seed)
     if init is not None:
@@ -211,7 +211,7 @@ def start_run(
     return TrainingRun(
         out=out, config=config, model=model, stats=begin.stats, preprocess=begin.preprocess,
         init_from=begin.init_from, step_loss=step_loss, optimizer=optimizer, scheduler=scheduler, generator=generator,
-        real_rng=real_rng, real=real, averager=weight_average(model, done, average, average_from), dtype=dtype,
+        real_rng=real_rng, real=real, averager=_weight_average(model, done, average, average_from), dtype=dtype,
         device=device, part=part, steps_per_epoch=max(1, config.samples_per_epoch // config.batch_size),
         deadline=deadline, started=started, progress=progress, world=world, epoch=done.get("epoch", 0),
         step_in_epoch=done.get("step", 0), global_step=done.get("global_step", 0),
@@ -219,8 +219,9 @@ def start_run(
     )
 
 
-def weight_average(model: RetargetNet, done: dict[str, Any], average: str | Path | None, average_from: int | None
-                    ) -> WeightAverage | None:
+def _weight_average(
+    model: RetargetNet, done: dict[str, Any], average: str | Path | None, average_from: int | None
+) -> WeightAverage | None:
     """The run's weight average: asked for (``average``) or stored (once a run averages, every later epoch
     joins the mean, written out or not); None otherwise."""
     stored = done.get("average")
@@ -240,8 +241,8 @@ def require_new(out: Path) -> None:
         raise InputError(f"{out}: already exists; pass --resume to continue that run, or choose another --out")
 
 
-def resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
-    """The run stored in ``out``: model, statistics, canvas settings, training state; InputError when there is
+def _stored_run(out: Path, config: TrainConfig) -> RetargetWeights:
+    """The run stored in ``out`` (model, statistics, canvas settings, training state); InputError when there is
     none or it was trained with settings other than ``config``."""
     if not out.exists():
         raise InputError(f"{out}: nothing to resume (no such checkpoint)")
@@ -253,4 +254,4 @@ def resume_state(out: Path, config: TrainConfig) -> dict[str, Any]:
     changed = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
     if changed:
         raise InputError(f"{out}: was trained with other settings ({', '.join(changed)}); resume with the same ones")
-    return {"model": loaded.model, "stats": loaded.stats, "training": loaded.training, "preprocess": loaded.preprocess}
+    return loaded
