@@ -1,4 +1,4 @@
-"""Stage `drive`: ``clone.drive.drive`` end to end (pose file -> H.264 mp4), frames/s and peak RSS.
+"""Stage `drive`: ``clone.drive.run.drive`` end to end (pose file -> H.264 mp4), frames/s and peak RSS.
 
 Tiny reference models are trained for a few steps in a temporary folder on a short synthetic performance
 (motion world, 24 frames): speed does not depend on how well a model is trained, but it does on the canvas
@@ -58,15 +58,15 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     import torch
 
     from bench.harness import peak_rss_mb, time_call
-    from clone.drive import drive
-    from clone.generate import build_drive_generator
-    from clone.networks import generator_input
-    from clone.reference_model import load_reference_model
+    from clone.drive.run import drive
+    from clone.model.networks import generator_input
+    from clone.model.reference import load_reference_model
+    from clone.runtime.generate import build_drive_generator
 
     torch.set_num_threads(1)
     runtime = args.get("runtime", "auto")
     if "int8_cache" in args:  # a cache of this run's own, so that "first" and "cached" mean what they say
-        from clone import int8_generator
+        from clone.runtime import int8 as int8_generator
 
         int8_generator.generator_cache_dir = lambda: Path(args["int8_cache"])
     t0 = time.perf_counter()
@@ -97,9 +97,9 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
 def int8_ssim(model: Any, driver_path: str, method: str, frames: int = 60) -> float:
     """Mean SSIM of the int8 generator's frames against the fp32 ONNX session's over the first driven frames
     (each runtime on its own previous frames, as when driving)."""
-    from clone.drive import drive_poses, read_driver
-    from clone.generate import generate_frames
+    from clone.drive.run import drive_poses, read_driver
     from clone.metrics.frames import frame_pair_scores
+    from clone.runtime.generate import generate_frames
 
     driven, _ = drive_poses(read_driver(driver_path), model, method)
     track = driven.frames(0, min(frames, driven.num_frames))
@@ -158,9 +158,9 @@ def prepare_int8(model_path: Path, cache: Path) -> str:
     """Quantise the model into ``cache`` when drive's default runtime is int8; returns that runtime's name."""
     import torch
 
-    from clone.int8_generator import build_int8_generator
-    from clone.onnx_generator import generator_runtime
-    from clone.reference_model import load_reference_model
+    from clone.model.reference import load_reference_model
+    from clone.runtime.int8 import build_int8_generator
+    from clone.runtime.onnx import generator_runtime
 
     runtime = generator_runtime("auto", torch.device("cpu"))
     if runtime == "int8":
@@ -175,7 +175,7 @@ def large_rows(tmp: Path, source: Any, frames: int) -> list[dict[str, Any]]:
     from pose_io.writers import write_track
 
     driver = write_track(tiled(source, frames), tmp / f"driver_large_{frames}.npz")
-    from clone.onnx_generator import onnx_available
+    from clone.runtime.onnx import onnx_available
 
     models = {"default": make_model(tmp, LARGE, steps=1), "old": make_model(tmp, LARGE, steps=1, **OLD_DEFAULT)}
     # The baseline is the state before issue #12: the old default generator on torch. (run label, model, runtime)

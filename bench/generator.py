@@ -3,14 +3,14 @@
 Every (size, threads, option) runs in its own fresh subprocess (``python -m bench.generator``), so its
 peak RSS (``VmHWM``) is that configuration's alone; ``rss_delta_mb`` is the peak minus the RSS after
 importing torch and building the model and input, i.e. what running the option costs. Batch 1, frame by
-frame, as ``clone.generate.generate_frames`` runs a temporal generator.
+frame, as ``clone.runtime.generate.generate_frames`` runs a temporal generator.
 
-Baseline: eager fp32 with autograd on (eval mode). Options: ``inference_mode`` (what clone/drive.py uses
+Baseline: eager fp32 with autograd on (eval mode). Options: ``inference_mode`` (what clone/drive/run.py uses
 today), ``channels_last`` (+ inference mode), ``bf16_autocast`` (CPU autocast + inference mode),
 ``jit_trace_freeze`` (``torch.jit.freeze(torch.jit.trace(...))`` under no_grad), ``compile``
 (``torch.compile`` default mode, inference mode; its compile time is recorded), ``onnxruntime`` (the
 generator exported to ONNX and run by ONNX Runtime in fp32; the export is ``prepare_s``), ``int8`` (the same
-export statically quantised by :mod:`clone.int8_generator`, what ``clone drive`` uses on a CPU when the ``fast``
+export statically quantised by :mod:`clone.runtime.int8`, what ``clone drive`` uses on a CPU when the ``fast``
 extra is installed; calibrated here on 8 random inputs, as the network is untrained; export + quantisation is
 ``prepare_s``). ``max_abs_diff`` / ``mean_abs_diff`` are each option's largest / mean output difference from
 fp32 eager on the same input (outputs are in [-1, 1]).
@@ -73,15 +73,15 @@ def _runner(option: str, net: Any, x: Any, plate: Any = None) -> tuple[Any, floa
             with torch.inference_mode():
                 return compiled(x, plate)
     elif option == "onnxruntime":
-        from clone.onnx_generator import OnnxGenerator
+        from clone.runtime.onnx import OnnxGenerator
 
         session = OnnxGenerator(net, x.shape[-1], plate is not None, threads=torch.get_num_threads())
 
         def call() -> Any:
             return session(x, plate)
     elif option == "int8":
-        from clone.int8_generator import QuantConfig, quantize
-        from clone.onnx_generator import OnnxGenerator, export_onnx
+        from clone.runtime.int8 import QuantConfig, quantize
+        from clone.runtime.onnx import OnnxGenerator, export_onnx
 
         generator = torch.Generator().manual_seed(1)
         feeds = [{"x": (torch.rand(x.shape, generator=generator) * 2 - 1).numpy(),
@@ -101,7 +101,7 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     import torch
 
     from bench.harness import peak_rss_mb, rss_mb, time_call
-    from clone.networks import UNetGenerator
+    from clone.model.networks import UNetGenerator
     from clone.train_ref import TrainConfig
 
     size, threads, option = int(args["size"]), int(args["threads"]), str(args["option"])
@@ -145,7 +145,7 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
 
     sizes = (128, 256)
     threads_list = (1,) if quick else (1, 2)
-    from clone.onnx_generator import onnx_available
+    from clone.runtime.onnx import onnx_available
 
     rows, notes = [], []
     options = [o for o in OPTIONS if not (quick and o == "compile")]
@@ -185,7 +185,7 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
         notes.append("--quick: 1 thread only, compile skipped")
     notes.append("peak RSS per configuration from a fresh subprocess (VmHWM); rss_delta = peak - RSS after "
                  "importing torch and building model + input")
-    notes.append("clone/drive.py runs the generator on ONNX Runtime in int8 when the `fast` extra is installed (the "
+    notes.append("clone/drive/run.py runs the generator on ONNX Runtime in int8 when the `fast` extra is installed (the "
                  "int8 row; `--runtime onnx`: the onnxruntime row), else under torch.inference_mode (the "
                  "inference_mode row); an fp32 option is worth switching to at > 1.3x that row with max_abs_diff < "
                  "1e-2; int8's differences here come from an untrained network calibrated on random inputs: its "

@@ -14,7 +14,7 @@ def _rates(device: Any, quick: bool) -> tuple[float, float]:
     import torch
 
     from bench.harness import time_call
-    from clone.networks import generator_input
+    from clone.model.networks import generator_input
     from clone.train_ref import TrainConfig, Trainer
 
     config = TrainConfig(size=128)

@@ -199,7 +199,7 @@ def _batch(quick: bool) -> list[dict[str, Any]]:
 
 
 def run(quick: bool = False, **_: object) -> dict[str, Any]:
-    from retarget.blas import set_blas_threads
+    from retarget.network.blas import set_blas_threads
 
     torch.set_num_threads(1)
     set_blas_threads(1)

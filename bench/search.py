@@ -1,4 +1,4 @@
-"""Stage `search`: motion retrieval (``retarget.search``) query time against index size, and index building.
+"""Stage `search`: motion retrieval (``retarget.applications.search``) query time against index size, and index building.
 
 Index: tracks of 500-1500 frames (about 1,000 on average) cut from the source track tiled forwards and
 backwards, each at its own offset, encoded once with the shipped network; the larger indexes repeat the
@@ -41,7 +41,7 @@ TRACK_FRAMES = (500, 1500)
 
 def _one_pass(index: Any, features: np.ndarray, top_k: int) -> list[float]:
     """Ours without refinement: the best score of the K best tracks from the one pass. features [P, C, L]."""
-    from retarget.search import correlate
+    from retarget.applications.search import correlate
 
     best = correlate(index, features).max(dim=0).values  # [S]
     per_track = torch.full((index.num_tracks,), -math.inf).scatter_reduce(
@@ -83,9 +83,9 @@ def _per_track_loop(index: Any, features: np.ndarray, top_k: int) -> list[tuple[
 
 def run(quick: bool = False, repeats: int | None = None, **_: object) -> dict[str, Any]:
     from retarget.api import PACKAGED_WEIGHTS, load_retargeter
-    from retarget.search import MotionCodeEncoder, from_sequences, load_index, save_index, search
-    from retarget.search.features import query_features, track_features
-    from retarget.search.query import _coarse_rows, rank
+    from retarget.applications.search import MotionCodeEncoder, from_sequences, load_index, save_index, search
+    from retarget.applications.search.features import query_features, track_features
+    from retarget.applications.search.query import _coarse_rows, rank
 
     threads_before = torch.get_num_threads()
     torch.set_num_threads(1)

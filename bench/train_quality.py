@@ -4,7 +4,7 @@ As in ``clone demo`` (quick sizes): the reference video is the tall character da
 motion (300 frames, 192², yaw 15°); the held-out ground truth is the same character and camera performing
 the *driver's* motion (120 frames it never trains on). ``clone.train_ref.train_reference`` trains on the
 reference at a 64² canvas (``TrainConfig(size=64)``), resumed from minute to minute; after each budget the
-generator is driven with the true poses of the held-out clip (``clone.generate.generate_frames``, each frame
+generator is driven with the true poses of the held-out clip (``clone.runtime.generate.generate_frames``, each frame
 on its own previous output) and scored with SSIM against the true frames cut to the same canvas.
 Baseline: SSIM of the median reference frame (background, no performer) against the same true frames.
 """
@@ -33,10 +33,10 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
     import torch
 
     from bench.harness import row
-    from clone.canvas import cut_frame
     from clone.demo import demo_motions
-    from clone.generate import generate_frames
-    from clone.reference_model import load_reference_model
+    from clone.model.canvas import cut_frame
+    from clone.model.reference import load_reference_model
+    from clone.runtime.generate import generate_frames
     from clone.synth import get_character, render_performance, save_performance
     from clone.train_ref import TrainConfig, train_reference
 

@@ -15,7 +15,7 @@ class Method(str, Enum):
 
 class StageMode(str, Enum):
     """Where a driven track may go (``clone drive --stage``): kept on the floor the ``reference`` stood on in its
-    video (:mod:`clone.stage`), or its ``raw`` trajectory as the method gave it."""
+    video (:mod:`clone.drive.stage`), or its ``raw`` trajectory as the method gave it."""
 
     REFERENCE = "reference"
     RAW = "raw"

@@ -14,7 +14,7 @@ from pose_io import fill_gaps, read_track, smooth, write_track
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.video_out import write_pose_video
 from retarget.api import load_retargeter
-from retarget.baselines import global_scale_retarget
+from retarget.baselines.methods import global_scale_retarget
 
 
 def limb_error_pct(track, reference) -> float:

@@ -11,9 +11,9 @@ skeleton code, its root trajectory is integrated from the predicted velocity, ce
 stands and with the feet on the reference's ground line.
 
 The torch backend (:class:`Retargeter`, any device) refines each driver window's motion code with a few
-gradient steps before decoding it (:mod:`retarget.refine`; ``InferenceConfig.refine_steps``), which keeps the
+gradient steps before decoding it (:mod:`retarget.inference.refine`; ``InferenceConfig.refine_steps``), which keeps the
 driver's range of motion. The numpy backend (:class:`NumpyRetargeter`, CPU, no torch import, see
-:mod:`retarget.numpy_weights`) runs the network without that refinement, as the torch one does with
+:mod:`retarget.network.numpy_weights`) runs the network without that refinement, as the torch one does with
 ``refine_steps=0``: the fast path for live use (``clone retarget apply --refine-steps 0``). Everything around
 the network (preparing tracks, windows, placing the result) is the same numpy code for both.
 """
@@ -30,20 +30,19 @@ import numpy as np
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.inference import RetargeterBase
-from retarget.inference_config import InferenceConfig, PreparedMotion, ReferenceCodes
-from retarget.preprocess import NormStats, PreprocessConfig
+from retarget.inference.algorithm import RetargeterBase
+from retarget.inference.config import InferenceConfig, PreparedMotion, ReferenceCodes
+from retarget.network.packaged import PACKAGED_WEIGHTS
+from retarget.network.preprocess import NormStats, PreprocessConfig
 
 if TYPE_CHECKING:
     import torch
 
-    from retarget.model import RetargetNet
-    from retarget.numpy_net import NumpyRetargetNet
+    from retarget.network.model import RetargetNet
+    from retarget.network.numpy_net import NumpyRetargetNet
 
 log = logging.getLogger(__name__)
 
-# The weights shipped with the package (trained by `clone retarget train`); their numpy export is the .npz beside.
-PACKAGED_WEIGHTS = Path(__file__).resolve().parent / "weights" / "clone2d_full.pt"
 # "auto": numpy on the CPU when the weights have an up-to-date export and no motion-code refinement is asked
 # for, else torch.
 BACKENDS = ("auto", "numpy", "torch")
@@ -75,10 +74,10 @@ class Retargeter(RetargeterBase):
     def _run(self, windows: np.ndarray, body: np.ndarray | None, view: np.ndarray | None) -> np.ndarray:
         import torch
 
-        from retarget.refine import decode_refined
+        from retarget.inference.refine import decode_refined
 
         c = self.config
-        # windows arrive as views of time-major memory (retarget.windows); torch gets the contiguous
+        # windows arrive as views of time-major memory (retarget.inference.windows); torch gets the contiguous
         # [N, 30, L] it always had, so its kernels, and their results, are the same
         x = torch.from_numpy(np.ascontiguousarray(windows)).to(self.device)  # [N, 30, L]
         if c.refine_steps == 0:
@@ -119,10 +118,10 @@ class NumpyRetargeter(RetargeterBase):
     torch. Its results are those of a :class:`Retargeter` whose ``config.refine_steps`` is 0.
 
     Its matrix products run on numpy's BLAS, whose thread count the process owns: on a machine another job
-    keeps busy, :func:`retarget.blas.set_blas_threads` to the free cores (``clone`` does) is many times faster.
+    keeps busy, :func:`retarget.network.blas.set_blas_threads` to the free cores (``clone`` does) is many times faster.
 
     Attributes:
-        model: the network (:class:`retarget.numpy_net.NumpyRetargetNet`).
+        model: the network (:class:`retarget.network.numpy_net.NumpyRetargetNet`).
         stats: its input statistics.
         preprocess: canvas height and smoothing.
         config: windowing of long tracks (``refine_steps`` must be 0).
@@ -166,7 +165,7 @@ def load_retargeter(
 
     Args:
         weights: a clone2d checkpoint, one of the authors' ``pretrained_*.pth`` with its ``meanpose*.npy`` /
-            ``stdpose*.npy`` next to it, or a numpy export (``.npz``, :mod:`retarget.numpy_weights`); None = the
+            ``stdpose*.npy`` next to it, or a numpy export (``.npz``, :mod:`retarget.network.numpy_weights`); None = the
             weights shipped in the package.
         device: "auto", "cpu", "cuda" or "cuda:N" (the numpy backend runs on the CPU: "auto" or "cpu").
         config: windowing of long tracks and motion-code refinement (default :class:`InferenceConfig`).
@@ -193,7 +192,7 @@ def load_retargeter(
     is_export = weights.suffix.lower() == ".npz"
     config = config or InferenceConfig()
     if backend != "torch" and on_cpu and (backend == "numpy" or is_export or config.refine_steps == 0):
-        from retarget.numpy_weights import current_export, read_npz
+        from retarget.network.numpy_weights import current_export, read_npz
 
         export = read_npz(weights) if is_export else current_export(weights)
         if export is not None:
@@ -203,14 +202,14 @@ def load_retargeter(
                                    dataclasses.replace(config, refine_steps=0))  # fmt: skip
         if backend == "numpy":
             raise InputError(
-                f"{weights}: no up-to-date numpy export beside it; write one with `python -m retarget.numpy_weights"
+                f"{weights}: no up-to-date numpy export beside it; write one with `python -m retarget.network.numpy_weights"
                 f" {weights} --out FILE.npz` and pass that file"
             )
     if backend == "numpy":
         raise InputError(f"the numpy backend runs on the CPU, not on device {device!r}")
     if is_export:
         raise InputError(f"{weights}: a numpy export runs on the CPU with the numpy backend; pass its checkpoint")
-    from retarget.checkpoint import load_weights
+    from retarget.network.checkpoint import load_weights
     from retarget.runtime import resolve_device
 
     try:

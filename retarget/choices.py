@@ -6,7 +6,7 @@ from enum import Enum
 
 
 class Variant(str, Enum):
-    """Network variants (:data:`retarget.model.VARIANTS`): the paper's three-encoder model and the authors'
+    """Network variants (:data:`retarget.network.model.VARIANTS`): the paper's three-encoder model and the authors'
     two-encoder models."""
 
     FULL = "full"
@@ -15,7 +15,7 @@ class Variant(str, Enum):
 
 
 class Ablation(str, Enum):
-    """Ablations of the paper's objective (:data:`retarget.losses.ABLATIONS`)."""
+    """Ablations of the paper's objective (:data:`retarget.training.losses.ABLATIONS`)."""
 
     FULL = "full"
     NO_TRIPLET = "no-triplet"

@@ -17,7 +17,7 @@ import numpy as np
 
 from pose_io.draw import blank_canvas
 from pose_io.track import PoseTrack
-from retarget.preprocess import LAYOUT
+from retarget.network.preprocess import LAYOUT
 
 RGB = tuple[int, int, int]
 _SHIFT = 4  # sub-pixel bits of OpenCV's drawing calls

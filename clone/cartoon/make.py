@@ -26,9 +26,9 @@ from clone.cartoon.proportions import displacement, held_limbs, hold_lengths, pr
 from clone.cartoon.reference import character_lengths, estimate_yaw, framing_of, reference_track, rest_joints
 from pose_io.track import PoseTrack
 from retarget.api import Retargeter
-from retarget.baselines import global_scale_retarget
-from retarget.preprocess import LAYOUT
-from retarget.tracks import body15_track, filled_body15
+from retarget.baselines.methods import global_scale_retarget
+from retarget.inference.tracks import body15_track, filled_body15
+from retarget.network.preprocess import LAYOUT
 
 log = logging.getLogger(__name__)
 

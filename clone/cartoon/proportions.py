@@ -13,7 +13,7 @@ import numpy as np
 
 from clone.metrics import limb_error
 from pose_io.layouts import JointLayout
-from retarget.preprocess import LAYOUT, ROOT
+from retarget.network.preprocess import LAYOUT, ROOT
 
 WIDTHS: frozenset[frozenset[str]] = frozenset(
     frozenset(pair) for pair in (("neck", "r_shoulder"), ("neck", "l_shoulder"), ("mid_hip", "r_hip"),

@@ -27,9 +27,9 @@ from clone.demo import demo_motions
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.resample import resample_values
 from pose_io.track import PoseTrack
-from retarget.placement import Placement, place, placement_of
-from retarget.preprocess import LAYOUT
-from retarget.tracks import body15_track, to_body15
+from retarget.inference.placement import Placement, place, placement_of
+from retarget.inference.tracks import body15_track, to_body15
+from retarget.network.preprocess import LAYOUT
 from retarget.world.camera import Camera, facing_angle, ground_origin, project
 from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, rest_pose, retarget_3d
 

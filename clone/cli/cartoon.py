@@ -52,10 +52,10 @@ def cartoon_command(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
-    from clone.drive import load_driving_retargeter
-    from clone.outputs import FOLDER, check_number, check_output
+    from clone.drive.run import load_driving_retargeter
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from pose_io.readers import parse_size, read_track
     from pose_io.video_out import VideoWriter
     from pose_io.writers import write_track

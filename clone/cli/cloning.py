@@ -87,10 +87,10 @@ def train_ref(
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    from clone.outputs import check_number, check_output
-    from clone.reference_model import preview_path
+    from clone.model.reference import preview_path
     from clone.train_ref import TrainConfig, TrainProgress, train_reference
-    from retarget import distributed
+    from pose_io.outputs import check_number, check_output
+    from retarget.training import distributed
 
     if size is not None and not (MIN_SIZE <= size <= MAX_SIZE and size & (size - 1) == 0):
         raise InputError(f"--size: must be a power of two from {MIN_SIZE} to {MAX_SIZE}, got {size}")
@@ -195,8 +195,8 @@ def drive(
     """Make a video of the reference performing the driver's motion."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from clone.drive import drive as run_drive
-    from clone.outputs import FOLDER, check_number, check_output
+    from clone.drive.run import drive as run_drive
+    from pose_io.outputs import FOLDER, check_number, check_output
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--max-gap", max_gap, 0, MAX_GAP)
@@ -233,8 +233,8 @@ def strip(
         "--overwrite", help="Replace an existing --out (MODEL itself too: it then loses its resume state).")] = False,
 ) -> None:
     """Write MODEL without what only --resume reads (discriminator, optimisers, random state): it drives the same."""
-    from clone.outputs import check_output
     from clone.train_ref.checkpoint import write_stripped
+    from pose_io.outputs import check_output
 
     check_output(out, "--out", suffixes=(".pt",), overwrite=overwrite)
     written, before, after = write_stripped(model, out, overwrite=overwrite)

@@ -138,8 +138,8 @@ def named_checkpoints(items: list[str] | None, taken: tuple[str, ...] = ()) -> d
 def training_device(spec: str, threads: int | None = None):  # -> torch.device
     """:func:`resolve_device_option` for a trainer that may run under torchrun: the processes of one machine then
     share its free cores unless ``--threads`` is given. InputError on a malformed torchrun environment."""
-    from retarget import distributed
     from retarget.runtime import free_cores
+    from retarget.training import distributed
 
     try:
         launch = distributed.from_environment()

@@ -33,7 +33,7 @@ def demo_command(
     import time
 
     from clone.demo import QUICK, DemoConfig, check_out, run_demo
-    from clone.outputs import check_number
+    from pose_io.outputs import check_number
     from retarget.runtime import configure_threads, resolve_device
 
     check_number("--minutes", minutes, 0.1, 7 * 24 * 60.0)

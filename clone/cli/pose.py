@@ -38,7 +38,7 @@ _IN_FPS_HELP = "Frame rate of the input (default: the file's, else 30)."
 def _read(poses: Path, fmt: PoseFormat | None, person: int | None, size: str | None,
           in_fps: float | None, frames_size: tuple[int, int] | None = None) -> TrackSummary:
     """Read a track with the common reader options; ``frames_size`` stands in for a size the file lacks."""
-    from clone.outputs import check_number
+    from pose_io.outputs import check_number
     from pose_io.readers import parse_size, read_track_summary
 
     check_number("--in-fps", in_fps, 0, MAX_FPS, low_open=True)
@@ -128,7 +128,7 @@ def show(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Draw the skeleton over black or over the --frames video/folder into an H.264 mp4."""
-    from clone.outputs import check_number, check_output
+    from pose_io.outputs import check_number, check_output
     from pose_io.video import read_frames
     from pose_io.video_out import write_pose_video
 
@@ -170,9 +170,9 @@ def convert(
 
     Steps run in this order: fill gaps, smooth, resample, change layout (so derived joints like the neck profit).
     """
-    from clone.outputs import FOLDER, check_number, check_output
     from pose_io import clean
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from pose_io.resample import resample
     from pose_io.writers import write_track
 
@@ -214,8 +214,8 @@ def extract(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Extract poses with MediaPipe Pose (model complexity 1, tracking mode, every frame)."""
-    from clone.outputs import FOLDER, check_output
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_output
 
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)
     if not video.exists():

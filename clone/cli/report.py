@@ -58,9 +58,9 @@ def report_command(
     from rich.table import Table
 
     from clone.metrics import METRICS
-    from clone.outputs import FOLDER, check_number, check_output
     from clone.report import REPORT_METHODS, make_report
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from retarget.runtime import configure_threads, resolve_device
 
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)

@@ -27,7 +27,7 @@ from clone.cli.common import (
 from clone.cli.retarget_cloning import eval_cloning
 from clone.cli.retarget_eval import evaluate
 from clone.cli.retarget_train import train
-from retarget.inference_config import REFINE_STEPS  # numpy and pose_io only: light for the command line
+from retarget.inference.config import REFINE_STEPS  # numpy and pose_io only: light for the command line
 
 retarget_app = typer.Typer(
     help="Retarget 2D motion to another person's skeleton and camera view (Aberman et al. 2019).",
@@ -81,10 +81,10 @@ def apply(
         "(the body moved against the slide, then the ankles; knees re-solved).")] = True,
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
-    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from pose_io.readers import parse_size, read_track
-    from retarget.batch import find_motions, is_batch, retarget_files
+    from retarget.inference.batch import find_motions, is_batch, retarget_files
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
@@ -114,7 +114,7 @@ def apply(
     retargeter = _retargeter(weights, device, backend, threads, refine_steps)
     codes = retargeter.reference_codes(reference, view_track, name=str(skeleton), view_name=str(view))
     if foot_lock:
-        from retarget.foot_lock import FootLockedRetargeter
+        from retarget.inference.foot_lock import FootLockedRetargeter
 
         retargeter = FootLockedRetargeter(retargeter)
     if batch:
@@ -138,9 +138,9 @@ def apply(
 
 def _batch_outputs(out: Path, motions: list[Path], fmt: str, overwrite: bool) -> list[Path]:
     """The outputs of several inputs inside the folder --out, each checked (InputError before any work)."""
-    from clone.outputs import check_output, check_writable_folder
     from pose_io.errors import InputError
-    from retarget.batch import batch_outputs
+    from pose_io.outputs import check_output, check_writable_folder
+    from retarget.inference.batch import batch_outputs
 
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: is a file; several inputs are written into a folder")
@@ -159,8 +159,8 @@ def _retargeter(
     """The network for --weights/--device/--backend/--refine-steps, its threads set (BLAS threads for numpy,
     torch's otherwise)."""
     from retarget.api import NumpyRetargeter, load_retargeter
-    from retarget.blas import set_blas_threads
-    from retarget.inference_config import InferenceConfig
+    from retarget.inference.config import InferenceConfig
+    from retarget.network.blas import set_blas_threads
     from retarget.runtime import free_cores
 
     config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
@@ -224,13 +224,13 @@ def interpolate(
 
     import numpy as np
 
-    from clone.outputs import check_number, check_output
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
+    from pose_io.outputs import check_number, check_output
     from pose_io.readers import parse_size, read_track
     from pose_io.video_out import VideoWriter
     from retarget.api import load_retargeter
-    from retarget.interpolate import CANVASES, grid_frames, interpolate_grid, parse_vary
+    from retarget.applications.interpolate import CANVASES, grid_frames, interpolate_grid, parse_vary
     from retarget.runtime import configure_threads
 
     start = time.perf_counter()

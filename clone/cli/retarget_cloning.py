@@ -56,9 +56,9 @@ def eval_cloning(
 
     from clone.demo import validation
     from clone.demo.scenes import reference_track
-    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.atomic import atomic_dir
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from retarget.api import PACKAGED_WEIGHTS
     from retarget.runtime import configure_threads
     from retarget.world import MotionWorld

@@ -26,7 +26,7 @@ from clone.cli.common import (
     named_checkpoints,
     user_errors,
 )
-from retarget.inference_config import REFINE_STEPS  # numpy and pose_io only: light for the command line
+from retarget.inference.config import REFINE_STEPS  # numpy and pose_io only: light for the command line
 
 # Ranges of options that scale time or memory, checked before any work (and MAX_CLIP_FRAMES).
 MAX_PAIRS = 1_000_000
@@ -94,8 +94,8 @@ def evaluate(
     """Retargeting error of our network vs baselines on unseen motions and characters, and code silhouettes."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from clone.outputs import FOLDER, check_number, check_output
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from retarget.evaluate import EvalConfig, run_eval
     from retarget.runtime import configure_threads
     from retarget.world import MotionWorld
@@ -116,7 +116,7 @@ def evaluate(
     named = named_checkpoints(compare)
     real_tracks = None
     if real is not None:
-        from retarget.train import read_real_tracks
+        from retarget.training.run import read_real_tracks
 
         real_tracks = dict(read_real_tracks(real, named=True))
     configure_threads(threads)

@@ -140,12 +140,13 @@ def train(
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from clone.outputs import check_number, check_output
     from pose_io.errors import InputError
-    from retarget import distributed
-    from retarget.losses import ablation_config
-    from retarget.train import TrainConfig, TrainProgress
-    from retarget.train import train as run_training
+    from pose_io.outputs import check_number, check_output
+    from retarget.training import distributed
+    from retarget.training.config import TrainConfig
+    from retarget.training.losses import ablation_config
+    from retarget.training.run import train as run_training
+    from retarget.training.state import TrainProgress
     from retarget.world import CameraSpread
 
     check_output(out, "--out", overwrite=True)  # rewritten after every epoch; --resume continues it

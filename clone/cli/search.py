@@ -49,10 +49,10 @@ def index(
     """Encode the motion of every track once and write the index to --out."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from clone.outputs import check_number, check_output
+    from pose_io.outputs import check_number, check_output
     from pose_io.readers import parse_size, read_track
     from retarget.api import load_retargeter
-    from retarget.search import MotionCodeEncoder, build_index, save_index
+    from retarget.applications.search import MotionCodeEncoder, build_index, save_index
 
     check_output(out, "--out", overwrite=overwrite)
     check_number("--threads", threads, 1, 1024)
@@ -90,10 +90,10 @@ def query(
     from rich.console import Console
     from rich.table import Table
 
-    from clone.outputs import check_number
+    from pose_io.outputs import check_number
     from pose_io.readers import parse_size, read_track
     from retarget.api import load_retargeter
-    from retarget.search import MotionCodeEncoder, load_index, search
+    from retarget.applications.search import MotionCodeEncoder, load_index, search
 
     check_number("--top", top, 1, 100_000)
     check_number("--per-track", per_track, 1, 100_000)
@@ -147,12 +147,17 @@ def evaluate(
     to be found performed by another character, seen at least --min-view-gap degrees of yaw away."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from clone.outputs import check_number, check_output
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
+    from pose_io.outputs import check_number, check_output
     from retarget.api import load_retargeter
-    from retarget.search import MotionCodeEncoder
-    from retarget.search.evaluate import RetrievalEvalConfig, evaluate_retrieval, markdown_table, summary
+    from retarget.applications.search import MotionCodeEncoder
+    from retarget.applications.search.evaluate import (
+        RetrievalEvalConfig,
+        evaluate_retrieval,
+        markdown_table,
+        summary,
+    )
     from retarget.world import MotionWorld
 
     if out is not None:

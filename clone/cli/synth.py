@@ -41,9 +41,9 @@ def render_command(
     """Render MOTION performed by a character, framed by the world's framing rule."""
     from rich.progress import Progress
 
-    from clone.outputs import FOLDER, check_number, check_output
     from clone.synth import get_character, save_performance
     from pose_io.errors import InputError
+    from pose_io.outputs import FOLDER, check_number, check_output
     from retarget.world.rigs import load_motion
 
     check_output(out, "--out", suffixes=(FOLDER,), overwrite=overwrite)

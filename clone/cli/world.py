@@ -39,8 +39,8 @@ def build(
     """Build (or open from the cache) the motion world and print its summary."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from clone.outputs import check_number, check_writable_folder
     from pose_io.errors import InputError
+    from pose_io.outputs import check_number, check_writable_folder
     from retarget.world import MotionWorld
 
     check_number("--fps", fps, 0, 1000.0, low_open=True)

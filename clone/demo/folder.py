@@ -17,7 +17,7 @@ MARKER = ".clone2d-demo"
 
 def check_out(out: Path) -> None:
     """Raise InputError unless ``out`` is new or a folder an earlier demo made, in a writable place."""
-    from clone.outputs import check_writable_folder
+    from pose_io.outputs import check_writable_folder
 
     if out.exists() and not (out / MARKER).is_file():
         raise InputError(f"{out}: exists and was not made by `clone demo`; choose another --out")

@@ -29,7 +29,7 @@ _NOTES = (
     (
         "SSIM and PSNR compare the generated frames with the true ones, whole and in a crop around the true "
         "person; the crop is where the claims show. Moved onto the stage: the share of frames that were off the "
-        "part of the frame the reference used, so the track was shifted onto it (clone.stage)."
+        "part of the frame the reference used, so the track was shifted onto it (clone.drive.stage)."
     ),
 )
 

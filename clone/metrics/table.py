@@ -89,7 +89,7 @@ METRICS: dict[str, MetricInfo] = {
     "stage_share": MetricInfo(
         "Moved onto the stage", "share of frames", None,
         "share of frames whose root or feet lay off the part of the frame the reference used in its video, so "
-        "the whole track was moved onto it (clone.stage)",
+        "the whole track was moved onto it (clone.drive.stage)",
     ),
 }  # fmt: skip
 

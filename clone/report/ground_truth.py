@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clone.canvas import Canvas, cut_frame
+from clone.model.canvas import Canvas, cut_frame
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 

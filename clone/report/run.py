@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clone.canvas import image_to_canvas
 from clone.metrics import FrameScorer, Scores, evaluate_track
+from clone.model.canvas import image_to_canvas
 from clone.report.folder import check_report_dir, report_dir
 from clone.report.ground_truth import cut_gt_frames, open_gt_frames, read_gt_poses
 from clone.report.panels import pose_panel, side_by_side, still_indices
@@ -28,7 +28,7 @@ from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:
-    from clone.reference_model import ReferenceModel
+    from clone.model.reference import ReferenceModel
 
 log = logging.getLogger(__name__)
 
@@ -117,13 +117,13 @@ def _write_video(
         path: the mp4 to write.
         model: the reference model.
         driver: the driver's poses.
-        driven: method -> the driver's poses moved onto the reference (``clone.drive.drive_poses``).
+        driven: method -> the driver's poses moved onto the reference (``clone.drive.run.drive_poses``).
         truth_frames: the true frames cut to the canvas (``cut_gt_frames``), or None.
         kept: receives the frame scores and stills.
         device: where the generator runs.
         progress: called with (frames done, total) after every frame.
     """
-    from clone.generate import generate_frames
+    from clone.runtime.generate import generate_frames
     from pose_io.video_out import VideoWriter
 
     height = _panel_height(model.canvas.size)
@@ -161,7 +161,7 @@ def _method_results(
         reference: the reference's [L] limb lengths and its height in pixels (``pose_io.measures``).
         truth: the ground-truth poses, or None.
         kept: the frame scores and stills of the video pass.
-        shares: method -> share of frames moved onto the reference's stage (``clone.stage.StageFit.share``);
+        shares: method -> share of frames moved onto the reference's stage (``clone.drive.stage.StageFit.share``);
             methods the stage was not applied to are missing.
     """
     at = sorted(kept.at)
@@ -238,17 +238,17 @@ def make_report(
         gt_frames: frames (video or image folder) of the same, the reference's frame size.
         overwrite: replace an existing report folder.
         device: where the networks run.
-        weights: retargeting weights (default: see ``clone.drive.retargeting_weights``).
+        weights: retargeting weights (default: see ``clone.drive.run.retargeting_weights``).
         max_gap: fill driver gaps of at most this many frames.
         progress: called with (frames done, total) after every frame.
-        stage: ``reference`` or ``raw`` (see ``clone.drive.drive_poses``).
+        stage: ``reference`` or ``raw`` (see ``clone.drive.run.drive_poses``).
         refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
 
     Returns:
         Where the page is and the summary numbers.
     """
-    from clone.drive import drive_poses, read_driver  # torch loads only when a report is made
-    from clone.reference_model import load_reference_model
+    from clone.drive.run import drive_poses, read_driver  # torch loads only when a report is made
+    from clone.model.reference import load_reference_model
 
     t0 = time.perf_counter()
     out_dir = Path(out_dir)

@@ -14,11 +14,11 @@ canvas. Each step takes a frame ``t`` with a usable pose and its predecessor ``t
 
 Losses: L1 to the real frame, least-squares GAN, and pix2pixHD's feature matching on D's activations.
 Background (``TrainConfig.background``, on by default): a plate estimated from the frames where the person is
-elsewhere (:mod:`clone.background`); G gives RGB + alpha, its frame is composited over the plate (warped with
+elsewhere (:mod:`clone.model.background`); G gives RGB + alpha, its frame is composited over the plate (warped with
 the sample) and every loss sees the composite; the plate is stored in the model for `clone drive`.
 Augmentation: one small random affine warp (kornia) applied identically to both pose maps and both frames.
 
-The result is ONE reference-model file (see :mod:`clone.reference_model`) holding the generator and, under
+The result is ONE reference-model file (see :mod:`clone.model.reference`) holding the generator and, under
 ``training``, the discriminator, optimisers, random state, step and config, so training can be resumed.
 
 Modules, one job each: :mod:`.config` (settings), :mod:`.data` (reading the reference, frame store, batches),

@@ -1,4 +1,4 @@
-"""The run's checkpoint: ONE reference-model file (:mod:`clone.reference_model`) with the generator and, under
+"""The run's checkpoint: ONE reference-model file (:mod:`clone.model.reference`) with the generator and, under
 ``training``, everything a resumed run needs, written atomically together.
 
 ``training`` holds the run's record (``steps``, ``seconds``, ``device``, ``config``) and its resume state:
@@ -6,7 +6,7 @@
 run's CPU generator, which picks samples and draws the augmentation). Since nothing lives beside the model,
 the state of one model cannot be resumed with the weights of another.
 
-None of it depends on the number of processes that trained (``torchrun``, see :mod:`retarget.distributed`):
+None of it depends on the number of processes that trained (``torchrun``, see :mod:`retarget.training.distributed`):
 the networks and optimisers are the same on every process, and the generator, which draws the numbers of the
 whole global batch on every process, is in the same state on all of them. Rank 0 writes the file; a model
 resumes under any number of processes.
@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 import torch
 
-from clone.canvas import Canvas
-from clone.reference_model import ReferenceModel, load_reference_model, save_reference_model
+from clone.model.canvas import Canvas
+from clone.model.reference import ReferenceModel, load_reference_model, save_reference_model
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.trainer import Trainer
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.global_scale import ScaleStats
+from retarget.baselines.global_scale import ScaleStats
 
 # The entries of ``training`` only resuming reads (the rest is the run's record: steps, seconds, device, config).
 RESUME_STATE = ("trainer", "rng")

@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from clone.background import PlateConfig
 from clone.choices import PrevSource
-from clone.networks import DiscriminatorConfig, GeneratorConfig, default_depth
+from clone.model.background import PlateConfig
+from clone.model.networks import DiscriminatorConfig, GeneratorConfig, default_depth
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,7 @@ class TrainConfig:
         prev_source: ``real`` previous frames or G's own (``generated``), see
             :meth:`clone.train_ref.Trainer.previous_input`; the plain name is accepted too.
         temporal: give G the previous frame at all.
-        background: estimate the reference's background plate (:mod:`clone.background`) and let G composite
+        background: estimate the reference's background plate (:mod:`clone.model.background`) and let G composite
             its frames over it (RGB + alpha); the plate is stored in the model.
         plate_input: G also sees the plate as input channels (with ``background``).
         plate: how the plate is estimated.

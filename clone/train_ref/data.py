@@ -18,16 +18,16 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from clone.background import PlateConfig, estimate_plate
-from clone.canvas import render_pose_map
 from clone.choices import Align
-from clone.reference_model import LAYOUT, file_sha256
-from clone.tensors import to_tensor
+from clone.model.background import PlateConfig, estimate_plate
+from clone.model.canvas import render_pose_map
+from clone.model.reference import LAYOUT, file_sha256
+from clone.model.tensors import to_tensor
 from pose_io.errors import InputError
 from pose_io.layouts import get_layout
 from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
-from retarget.global_scale import ScaleStats, scale_stats
+from retarget.baselines.global_scale import ScaleStats, scale_stats
 
 if TYPE_CHECKING:
     from pose_io.video import Frames
@@ -97,7 +97,7 @@ class ReferenceData:
 
 
 def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:
-    """The background plate of the reference on the canvas (:func:`clone.background.estimate_plate`).
+    """The background plate of the reference on the canvas (:func:`clone.model.background.estimate_plate`).
 
     Args:
         data: the reference's frames and poses on the canvas.

@@ -5,7 +5,7 @@ augmented batches until the step or time budget is spent, writes previews (pose 
 checkpoints the model file with its training state (:mod:`clone.train_ref.checkpoint`). Progress goes to a
 callback; the caller draws it. Ctrl-C ends the run early and still saves (in a single process).
 
-Under ``torchrun`` every process runs :func:`train_reference` (see :mod:`retarget.distributed`): each reads
+Under ``torchrun`` every process runs :func:`train_reference` (see :mod:`retarget.training.distributed`): each reads
 the whole reference, the batch size is the GLOBAL batch, of which process r trains its contiguous part, and the
 run's generator (sample choice, augmentation) draws the numbers of the whole batch on every process, so a step
 is one process's step and the stored state resumes under any number of processes. Rank 0 reports, writes
@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
-from clone.canvas import choose_canvas, cut_frame, image_to_canvas
-from clone.reference_model import ReferenceModel, preview_path
+from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
+from clone.model.reference import ReferenceModel, preview_path
 from clone.train_ref.augment import random_affines, warp_batch
 from clone.train_ref.checkpoint import ReferenceInfo
 from clone.train_ref.config import TrainConfig
@@ -51,7 +51,7 @@ from clone.train_ref.state import (
 )
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget import distributed
+from retarget.training import distributed
 
 if TYPE_CHECKING:
     from pose_io.video import Frames

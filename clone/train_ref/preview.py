@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import torch
 
-from clone.tensors import to_images
+from clone.model.tensors import to_images
 from clone.train_ref.data import ReferenceData
 from clone.train_ref.trainer import Trainer
 from pose_io.atomic import atomic_file

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import torch
 
-from clone.reference_model import ReferenceModel
+from clone.model.reference import ReferenceModel
 from clone.train_ref.checkpoint import ReferenceInfo, load_resumable, restore, resume_config, save_checkpoint
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.trainer import Trainer
 from pose_io.errors import InputError
-from retarget import distributed
+from retarget.training import distributed
 
 
 @dataclass

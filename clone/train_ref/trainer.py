@@ -6,7 +6,7 @@ pix2pixHD's feature matching on D's activations; D judges the consecutive pair
 A generator trained with a background plate gets the sample's (warped) ``plate`` and composites over it, so
 every loss sees the composite.
 
-Under ``torchrun`` (:mod:`retarget.distributed`) both networks train in DistributedDataParallel: each process
+Under ``torchrun`` (:mod:`retarget.training.distributed`) both networks train in DistributedDataParallel: each process
 steps on its part of the global batch, and the random numbers of the whole batch are drawn on every process
 (:meth:`Trainer.previous_input`), so the step is that of one process. On CUDA the networks run in bfloat16
 autocast when ``dtype`` says so.
@@ -20,7 +20,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from clone.networks import (
+from clone.model.networks import (
     PatchDiscriminator,
     UNetGenerator,
     build_discriminator,
@@ -32,7 +32,7 @@ from clone.networks import (
 )
 from clone.train_ref.augment import degrade_previous
 from clone.train_ref.config import TrainConfig
-from retarget import distributed
+from retarget.training import distributed
 
 
 class Trainer:
@@ -113,7 +113,7 @@ class Trainer:
             sample: the (augmented) batch of :meth:`ReferenceData.batch`, on the device.
             prev_input: [B, 3, S, S] what G gets as the previous frame.
             fake_prev: [B, 3, S, S] previous frame of D's fake pairs (default: the real one).
-            weight: factor of this process's mean losses (:func:`retarget.distributed.shard_weight`).
+            weight: factor of this process's mean losses (:func:`retarget.training.distributed.shard_weight`).
 
         Returns:
             Loss values (means over ``sample``).

@@ -27,7 +27,7 @@ removed, the least-squares one, so the root trajectory counts but not where in t
 stood) and ``placed`` (the output as it lands in the reference's frame).
 
 Rows: the networks (ours, ``--compare`` checkpoints, the authors' released models), the 2D baselines of
-:mod:`retarget.baselines`, and three 3D references that see the 3D truth (:data:`REFERENCES_3D`).
+:mod:`retarget.baselines.methods`, and three 3D references that see the 3D truth (:data:`REFERENCES_3D`).
 
 Modules: :mod:`~retarget.evaluate.config` (what is evaluated), :mod:`~retarget.evaluate.scores` (one case's
 scores and their summary), :mod:`~retarget.evaluate.references3d`, :mod:`~retarget.evaluate.cases` (sampling

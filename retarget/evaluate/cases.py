@@ -11,8 +11,8 @@ from pose_io.errors import InputError
 from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progress
 from retarget.evaluate.references3d import REFERENCE_FUNCTIONS
 from retarget.evaluate.scores import CaseScores, case_scores, summarise
-from retarget.tracks import body15_track
-from retarget.windows import strided_starts
+from retarget.inference.tracks import body15_track
+from retarget.inference.windows import strided_starts
 from retarget.world.skeleton import Motion3D, Skeleton, joint_index, retarget_3d
 from retarget.world.split import WindowLabel, WorldSplit
 

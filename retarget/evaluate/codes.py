@@ -10,8 +10,8 @@ import torch
 
 from pose_io.errors import InputError
 from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig
-from retarget.preprocess import joints_to_channels
-from retarget.tracks import body15_track, prepare_track
+from retarget.inference.tracks import body15_track, prepare_track
+from retarget.network.preprocess import joints_to_channels
 from retarget.world.split import WorldSplit
 
 _LABEL_NAMES = {"motion": "motion", "body": "character", "view": "view"}

@@ -23,8 +23,8 @@ from pose_io.clean import smooth_joints
 from pose_io.measures import amplitude_ratio, motion_spread, reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 from retarget.evaluate.config import Method
-from retarget.preprocess import LAYOUT, ROOT_INDEX
-from retarget.tracks import filled_body15
+from retarget.inference.tracks import filled_body15
+from retarget.network.preprocess import LAYOUT, ROOT_INDEX
 
 
 def wrist_rise(joints: np.ndarray, height: float) -> float:

@@ -15,7 +15,7 @@ import numpy as np
 from pose_io.atomic import atomic_dir, check_new_output
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.baselines import global_scale_retarget, limb_scale_retarget
+from retarget.baselines.methods import global_scale_retarget, limb_scale_retarget
 from retarget.evaluate.cases import ClipMotions, evaluate
 from retarget.evaluate.codes import code_silhouettes, plot_codes, silhouette
 from retarget.evaluate.config import DEFAULT_CONFIG, PROBE_ROW, EvalConfig, Method, Progress
@@ -38,7 +38,7 @@ OFFICIAL_FILES: dict[str, str] = {
 }
 DESCRIPTIONS: dict[str, str] = {
     "ours": "our network; skeleton and view codes and placement from the reference window; the driver's motion "
-    "code refined by gradient steps on its own reconstruction (retarget.refine) unless the steps are 0",
+    "code refined by gradient steps on its own reconstruction (retarget.inference.refine) unless the steps are 0",
     "global scaling (EDN)": "Everybody Dance Now's global pose normalisation: per-frame scale and offset "
     "interpolated between the near and far ankle positions of the driver and of the reference",
     "2D per-limb scaling (FK)": "naive 2D retargeting: every 2D limb of the driver scaled to the reference's "
@@ -58,7 +58,7 @@ def network_method(
     network as its encoders give the codes, as the authors released their models).
     """
     from retarget.api import load_retargeter
-    from retarget.inference_config import InferenceConfig
+    from retarget.inference.config import InferenceConfig
 
     config = InferenceConfig() if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
     net = load_retargeter(weights, device=device, config=config, backend="torch")
@@ -71,7 +71,7 @@ def network_method(
 
 def _training_seed(path: Path) -> int | None:
     """The world seed a clone2d checkpoint was trained with, when it records one."""
-    from retarget.checkpoint import load_weights
+    from retarget.network.checkpoint import load_weights
 
     training = load_weights(path).training or {}
     seed = training.get("config", {}).get("seed") if isinstance(training.get("config"), dict) else None

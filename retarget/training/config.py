@@ -6,10 +6,10 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from retarget.augment import AugmentConfig
-from retarget.losses import LossConfig
-from retarget.model import variant_config
-from retarget.preprocess import PreprocessConfig
+from retarget.network.model import variant_config
+from retarget.network.preprocess import PreprocessConfig
+from retarget.training.augment import AugmentConfig
+from retarget.training.losses import LossConfig
 from retarget.world.camera import CameraSpread
 
 # The inference smoothing of networks trained here, chosen on the validation split (500 cases, clean and with
@@ -26,7 +26,7 @@ class TrainConfig:
     """Everything that decides what is learned (defaults: the paper's / the authors' settings).
 
     Attributes:
-        variant: network variant (:data:`retarget.model.VARIANTS`).
+        variant: network variant (:data:`retarget.network.model.VARIANTS`).
         window: frames per training window (the longest clip length).
         batch_size: samples per step (each sample has 8 windows).
         lr: Adam learning rate.
@@ -39,7 +39,7 @@ class TrainConfig:
         real_weight: weight of their self-reconstruction loss.
         seed: seed of every random choice.
         augment: augmentation settings.
-        loss: objective settings (see :data:`retarget.losses.ABLATIONS`).
+        loss: objective settings (see :data:`retarget.training.losses.ABLATIONS`).
         preprocess: canvas and smoothing used at inference (stored in the checkpoint); default
             :data:`OUR_PREPROCESS`, not the authors' demo smoothing.
         cameras: how the camera of a training window is drawn (pitch range, share of perspective cameras

@@ -14,10 +14,10 @@ from torch.utils.data import DataLoader, Dataset
 from pose_io.errors import InputError
 from pose_io.measures import skeleton_heights
 from pose_io.track import PoseTrack
-from retarget.augment import COMBOS
-from retarget.model import variant_config
-from retarget.preprocess import LAYOUT, LOCAL_INDEX, NormStats, PreprocessConfig, row_statistics
-from retarget.tracks import prepare_track
+from retarget.inference.tracks import prepare_track
+from retarget.network.model import variant_config
+from retarget.network.preprocess import LAYOUT, LOCAL_INDEX, NormStats, PreprocessConfig, row_statistics
+from retarget.training.augment import COMBOS
 from retarget.training.config import TrainConfig
 from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
 

@@ -14,8 +14,8 @@ import torch
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget import distributed
-from retarget.checkpoint import RetargetWeights, save_checkpoint
+from retarget.network.checkpoint import RetargetWeights, save_checkpoint
+from retarget.training import distributed
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
 from retarget.training.data import CrossSamples, WorldSplit, batch_loader, body_scales, validation_set
 from retarget.training.state import ProgressFn, TrainingRun, TrainProgress, begin_run, start_run
@@ -87,7 +87,7 @@ def fit(
 ) -> TrainSummary:
     """Train (or continue training) a retargeting network and write its checkpoint.
 
-    In a process group (``torchrun``, see :mod:`retarget.distributed`) every process runs this function:
+    In a process group (``torchrun``, see :mod:`retarget.training.distributed`) every process runs this function:
     ``config.batch_size`` is the global batch, of which each process trains its part; the learning rate is
     that of one process. Rank 0 reports progress, validates and writes ``out``.
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import torch
 
 from pose_io.errors import InputError
-from retarget import distributed
-from retarget.checkpoint import load_weights
+from retarget.network.checkpoint import load_weights
+from retarget.training import distributed
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
 from retarget.training.loop import CPU, TrainSummary, fit
 from retarget.training.state import ProgressFn, require_new

@@ -18,10 +18,10 @@ import torch
 
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget import distributed
-from retarget.checkpoint import RetargetWeights, load_checkpoint, save_checkpoint
-from retarget.model import RetargetNet, variant_config
-from retarget.preprocess import NormStats, PreprocessConfig
+from retarget.network.checkpoint import RetargetWeights, load_checkpoint, save_checkpoint
+from retarget.network.model import RetargetNet, variant_config
+from retarget.network.preprocess import NormStats, PreprocessConfig
+from retarget.training import distributed
 from retarget.training.average import WeightAverage
 from retarget.training.config import TrainConfig
 from retarget.training.data import (

@@ -5,13 +5,13 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from retarget import distributed
-from retarget.augment import augment_targets, corrupt_inputs
-from retarget.checkpoint import unwrap
-from retarget.losses import objective, self_reconstruction
-from retarget.model import RetargetNet
-from retarget.preprocess import NormStats, joints_to_channels
+from retarget.network.checkpoint import unwrap
+from retarget.network.model import RetargetNet
+from retarget.network.preprocess import NormStats, joints_to_channels
+from retarget.training import distributed
+from retarget.training.augment import augment_targets, corrupt_inputs
 from retarget.training.config import TrainConfig
+from retarget.training.losses import objective, self_reconstruction
 
 
 def batch_tensors(
@@ -108,7 +108,7 @@ class TrainLoss(nn.Module):
             targets: [B, 8, 30, T] normalised ground truth.
             real_inputs: optional [R, 30, T] corrupted real-track windows (self-reconstruction).
             real_targets: [R, 30, T] their clean windows.
-            weight: factor of the synthetic batch's mean loss (:func:`retarget.distributed.shard_weight`).
+            weight: factor of the synthetic batch's mean loss (:func:`retarget.training.distributed.shard_weight`).
             ids: [B, 2, 3] the samples' triple ids.
 
         Returns:

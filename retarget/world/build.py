@@ -15,7 +15,7 @@ import numpy as np
 
 from pose_io.atomic import check_free_space
 from pose_io.errors import InputError
-from retarget.windows import strided_starts
+from retarget.inference.windows import strided_starts
 from retarget.world.camera import MAX_PITCH, VIEW_YAWS
 from retarget.world.characters import NAMED_CHARACTERS, sample_skeleton
 from retarget.world.config import SPLITS, WORLD_VERSION, WorldConfig

@@ -15,6 +15,6 @@ def _int8_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(autouse=True)
 def _int8_cache_in_tmp(_int8_cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """`clone drive` and reports pick the int8 runtime when onnxruntime is installed; keep its cache here."""
-    from clone import int8_generator
+    from clone.runtime import int8 as int8_generator
 
     monkeypatch.setattr(int8_generator, "generator_cache_dir", lambda: _int8_cache)

@@ -18,9 +18,9 @@ from clone.demo.scenes import edge_distance, reference_track
 from pose_io.errors import InputError
 from pose_io.measures import reference_limb_lengths
 from retarget.api import PACKAGED_WEIGHTS
-from retarget.checkpoint import save_checkpoint
-from retarget.model import RetargetNet, variant_config
-from retarget.preprocess import NormStats
+from retarget.network.checkpoint import save_checkpoint
+from retarget.network.model import RetargetNet, variant_config
+from retarget.network.preprocess import NormStats
 from retarget.world import MotionWorld
 from tests.retarget.evaluate.helpers import TINY
 

@@ -1,5 +1,5 @@
 """smooth_joints block by block, into ``out`` or in place, gives scipy's gaussian_filter1d of the whole track,
-bit for bit (the filter the authors ran; tests/retarget/test_preprocess.py pins short tracks)."""
+bit for bit (the filter the authors ran; tests/retarget/network/test_preprocess.py pins short tracks)."""
 
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ def one_thread():
     whose other core is busy; the previous counts come back afterwards."""
     import torch
 
-    from retarget.blas import blas_threads, set_blas_threads
+    from retarget.network.blas import blas_threads, set_blas_threads
 
     threads, blas = torch.get_num_threads(), blas_threads()
     torch.set_num_threads(1)

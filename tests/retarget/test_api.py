@@ -11,8 +11,8 @@ from pose_io.readers import read_track
 from pose_io.resample import resample
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
-from retarget.placement import placement_of
-from retarget.tracks import to_body15
+from retarget.inference.placement import placement_of
+from retarget.inference.tracks import to_body15
 
 
 @pytest.fixture(scope="module")
@@ -181,7 +181,7 @@ def test_missing_packaged_weights_say_what_to_do(monkeypatch, tmp_path):
 
 def test_body_normalised_results_do_not_depend_on_the_guessed_image_size(weights_dir, shared_dir):
     """OpenPose JSON stores no image size; with body-height normalisation the guess must not matter."""
-    from retarget.checkpoint import load_weights
+    from retarget.network.checkpoint import load_weights
 
     loaded = load_weights(weights_dir / "pretrained_full.pth")
     body = api.Retargeter(loaded.model, loaded.stats, dataclasses.replace(loaded.preprocess, body_height=160.0),

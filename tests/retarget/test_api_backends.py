@@ -77,9 +77,9 @@ def test_codes_of_another_network_are_refused(backends, people):
 def test_numpy_backend_modules_import_without_torch():
     import subprocess
 
-    code = ("import sys; import retarget.api, retarget.batch, retarget.numpy_weights, retarget.inference_config, "
-            "retarget.runtime, retarget.blas, pose_io, pose_io.readers, pose_io.writers; "
-            "config = retarget.inference_config.InferenceConfig(refine_steps=0); "
+    code = ("import sys; import retarget.api, retarget.inference.batch, retarget.network.numpy_weights, retarget.inference.config, "
+            "retarget.runtime, retarget.network.blas, pose_io, pose_io.readers, pose_io.writers; "
+            "config = retarget.inference.config.InferenceConfig(refine_steps=0); "
             "retarget.api.load_retargeter(config=config, backend='auto'); print('torch' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", out.stderr

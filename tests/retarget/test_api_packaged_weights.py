@@ -20,12 +20,12 @@ from pose_io.compare import pose_error
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
-from retarget.baselines import global_scale_retarget
-from retarget.checkpoint import KIND, load_weights
-from retarget.model import VARIANTS
-from retarget.placement import placement_of
-from retarget.preprocess import LAYOUT, ROOT_INDEX
-from retarget.tracks import filled_body15
+from retarget.baselines.methods import global_scale_retarget
+from retarget.inference.placement import placement_of
+from retarget.inference.tracks import filled_body15
+from retarget.network.checkpoint import KIND, load_weights
+from retarget.network.model import VARIANTS
+from retarget.network.preprocess import LAYOUT, ROOT_INDEX
 from tests.figures import tall_and_small, walking_figure
 
 

@@ -10,12 +10,13 @@ import pytest
 import torch
 import torch.multiprocessing as mp
 
-from retarget import distributed, model
 from retarget.api import load_retargeter
-from retarget.checkpoint import load_checkpoint
-from retarget.train import fit
-from tests.retarget.test_distributed import free_port
+from retarget.network import model
+from retarget.network.checkpoint import load_checkpoint
+from retarget.training import distributed
+from retarget.training.loop import fit
 from tests.retarget.training.fake_split import TINY, FakeSplit
+from tests.retarget.training.test_distributed import free_port
 
 pytestmark = [
     pytest.mark.cuda,

@@ -12,8 +12,9 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from retarget.placement import Placement, _stand, place
-from retarget.preprocess import (
+from retarget.inference.placement import Placement, _stand, place
+from retarget.inference.windows import fade_weights, run_windowed, window_starts
+from retarget.network.preprocess import (
     LAYOUT,
     LOCAL_INDEX,
     NUM_CHANNELS,
@@ -24,7 +25,6 @@ from retarget.preprocess import (
     joints_to_channels,
     row_statistics,
 )
-from retarget.windows import fade_weights, run_windowed, window_starts
 
 
 def _stats(rng: np.random.Generator) -> NormStats:
@@ -233,8 +233,8 @@ def test_channel_types_are_for_arrays():
 def test_a_body15_track_is_prepared_from_its_own_joints():
     """No converted copy of a track already in body15: its own (read-only) joints, the numbers of its body25
     original's conversion."""
-    from retarget.preprocess import PreprocessConfig
-    from retarget.tracks import _body15_joints, prepare
+    from retarget.inference.tracks import _body15_joints, prepare
+    from retarget.network.preprocess import PreprocessConfig
     from tests.figures import walking_figure
 
     body25 = walking_figure(80, dropped=0.1, always_seen=("mid_hip", "l_ankle", "r_ankle"), seed=3)

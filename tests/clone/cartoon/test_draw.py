@@ -2,7 +2,7 @@ import numpy as np
 
 from clone.cartoon import CartoonLook, Palette, cartoon_frames, draw_cartoon
 from clone.cartoon.draw import scene
-from retarget.tracks import body15_track, filled_body15
+from retarget.inference.tracks import body15_track, filled_body15
 from tests.figures import walking_figure
 
 
@@ -52,6 +52,6 @@ def test_a_back_view_has_no_face():
 
 
 def track_index(name: str) -> int:
-    from retarget.preprocess import LAYOUT
+    from retarget.network.preprocess import LAYOUT
 
     return LAYOUT.index(name)

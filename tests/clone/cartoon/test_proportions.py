@@ -3,8 +3,8 @@ import pytest
 
 from clone.cartoon.proportions import displacement, held_limbs, hold_lengths, proportion_error, tree_order
 from pose_io.measures import limb_lengths
-from retarget.preprocess import LAYOUT, ROOT_INDEX
-from retarget.tracks import filled_body15
+from retarget.inference.tracks import filled_body15
+from retarget.network.preprocess import LAYOUT, ROOT_INDEX
 from tests.figures import walking_figure
 
 

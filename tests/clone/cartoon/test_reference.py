@@ -5,9 +5,9 @@ import pytest
 from clone.cartoon.character import PRESETS
 from clone.cartoon.reference import character_lengths, estimate_yaw, framing_of, reference_track
 from pose_io.measures import skeleton_height
-from retarget.placement import placement_of
-from retarget.preprocess import LAYOUT
-from retarget.tracks import to_body15
+from retarget.inference.placement import placement_of
+from retarget.inference.tracks import to_body15
+from retarget.network.preprocess import LAYOUT
 
 
 def test_reference_track_stands_where_the_driver_stands_at_its_scale(driver):

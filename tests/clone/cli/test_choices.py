@@ -68,7 +68,7 @@ def test_a_bad_choice_is_one_error_line_naming_the_valid_ones(tmp_path: Path, ar
 
 
 def test_a_good_choice_reaches_the_library_as_its_plain_name(tmp_path: Path, monkeypatch):
-    import clone.drive
+    import clone.drive.run
     from pose_io.errors import InputError
 
     seen = {}
@@ -77,7 +77,7 @@ def test_a_good_choice_reaches_the_library_as_its_plain_name(tmp_path: Path, mon
         seen.update(kwargs)
         raise InputError("stop here")
 
-    monkeypatch.setattr(clone.drive, "drive", fake_drive)
+    monkeypatch.setattr(clone.drive.run, "drive", fake_drive)
     line = one_error_line(invoke("drive", str(tmp_path / "drv"), "--out", str(tmp_path / "o.mp4"),
                                  "--method", "global-scale", "--device", "cpu"))
     assert line == "error: stop here"
@@ -120,8 +120,10 @@ def test_shell_completion_is_on_and_completes_the_choices():
 # The command line keeps copies of the library's enums whose modules import torch or OpenCV; they must agree.
 def test_the_library_registries_match_the_enums():
     """The enums are built from light modules; the registries that interpret them must hold the same names."""
-    from clone import canvas, drive
-    from retarget import losses, model
+    from clone.drive import run as drive
+    from clone.model import canvas
+    from retarget.network import model
+    from retarget.training import losses
     from retarget.world.config import SPLITS
 
     assert set(values(choices.Split)) < set(SPLITS)

@@ -50,7 +50,7 @@ def test_apply_runs_without_importing_torch(clips, tmp_path):
     proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     imported = [line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines() if line.startswith("import time")]
-    assert "retarget.numpy_net" in imported and not [m for m in imported if m.split(".")[0] == "torch"]
+    assert "retarget.network.numpy_net" in imported and not [m for m in imported if m.split(".")[0] == "torch"]
     assert len(read_track(out)) == 40
     out.unlink()
     proc = subprocess.run([*cmd, "--backend", "torch"], cwd=REPO, capture_output=True, text=True, check=False)

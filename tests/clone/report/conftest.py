@@ -15,13 +15,13 @@ def tiny_models(tmp_path):
     untrained retargeting weights: the run is real, the pictures are noise."""
     import torch
 
-    from clone.canvas import full_frame_canvas
-    from clone.networks import GeneratorConfig, build_generator
-    from clone.reference_model import ReferenceModel, save_reference_model
-    from retarget.checkpoint import save_checkpoint
-    from retarget.global_scale import scale_stats
-    from retarget.model import NetworkConfig, RetargetNet
-    from retarget.preprocess import NormStats
+    from clone.model.canvas import full_frame_canvas
+    from clone.model.networks import GeneratorConfig, build_generator
+    from clone.model.reference import ReferenceModel, save_reference_model
+    from retarget.baselines.global_scale import scale_stats
+    from retarget.network.checkpoint import save_checkpoint
+    from retarget.network.model import NetworkConfig, RetargetNet
+    from retarget.network.preprocess import NormStats
 
     torch.manual_seed(0)
     reference = walk(T)

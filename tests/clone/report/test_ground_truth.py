@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clone.canvas import full_frame_canvas
+from clone.model.canvas import full_frame_canvas
 from clone.report.ground_truth import cut_gt_frames, open_gt_frames, read_gt_poses
 from pose_io import InputError
 from tests.clone.report.helpers import SIZE, walk, write_gt

@@ -90,7 +90,7 @@ def test_save_performance_round_trip(tmp_path: Path) -> None:
 
 
 def test_performance_background_is_what_the_video_shows_where_the_performer_is_not() -> None:
-    from clone.background import person_mask
+    from clone.model.background import person_mask
     from clone.synth import performance_background
     from pose_io.measures import skeleton_height
 

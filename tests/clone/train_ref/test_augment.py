@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from clone.tensors import to_tensor
+from clone.model.tensors import to_tensor
 from clone.train_ref import AugmentConfig, degrade_previous, random_affines, warp_batch
 
 

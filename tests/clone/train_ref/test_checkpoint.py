@@ -8,7 +8,7 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.reference_model import load_reference_model
+from clone.model.reference import load_reference_model
 from tests.clone.train_ref.helpers import one_line_error, train_args
 
 

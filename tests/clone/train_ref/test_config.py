@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from clone.background import PlateConfig
+from clone.model.background import PlateConfig
 from clone.train_ref import AugmentConfig, LossConfig, TrainConfig
 from clone.train_ref.config import PrevSource
 

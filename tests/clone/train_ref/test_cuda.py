@@ -9,7 +9,7 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.reference_model import load_reference_model, preview_path
+from clone.model.reference import load_reference_model, preview_path
 from clone.train_ref import TrainConfig, train_reference
 from tests.clone.train_ref.helpers import train_args
 from tests.clone.train_ref.test_distributed import _torchrun

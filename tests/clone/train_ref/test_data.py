@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.reference_model import load_reference_model
+from clone.model.reference import load_reference_model
 from pose_io.writers import write_track
 from tests.clone.train_ref.helpers import (
     OFFICIAL_WEIGHTS,

@@ -5,7 +5,7 @@ again; after each part it matches the model one process trains straight through.
 of 2 processes (gradient all-reduce, convolutions over 1 sample instead of 2) differ in rounding from one
 process's, and Adam turns that rounding on entries with near-zero gradients into visible steps, so the weights
 are compared by the norm of their difference relative to the norm of the update (< 1e-2) and by the median
-entry (< 1e-6); see tests/retarget/test_distributed.py for the gradient-level check.
+entry (< 1e-6); see tests/retarget/training/test_distributed.py for the gradient-level check.
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.networks import build_generator
-from clone.reference_model import load_reference_model, preview_path
+from clone.model.networks import build_generator
+from clone.model.reference import load_reference_model, preview_path
 from clone.train_ref import TrainConfig
 from tests.clone.train_ref.helpers import one_line_error, train_args
-from tests.retarget.test_distributed import free_port
+from tests.retarget.training.test_distributed import free_port
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -71,7 +71,7 @@ def test_two_processes_continue_a_model_and_one_finishes_it(reference, tmp_path)
 
 
 def test_a_batch_smaller_than_the_processes_is_one_line_error(reference, tmp_path, monkeypatch):
-    from retarget import distributed
+    from retarget.training import distributed
 
     poses, frames = reference
     out = tmp_path / "ref.pt"

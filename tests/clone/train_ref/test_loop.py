@@ -7,7 +7,7 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.reference_model import FORMAT_VERSION, KIND, load_reference_model, preview_path
+from clone.model.reference import FORMAT_VERSION, KIND, load_reference_model, preview_path
 from tests.clone.train_ref.helpers import one_line_error, train_args
 
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import torch
 
-from retarget.checkpoint import save_checkpoint
-from retarget.model import RetargetNet, variant_config
-from retarget.preprocess import NormStats
+from retarget.network.checkpoint import save_checkpoint
+from retarget.network.model import RetargetNet, variant_config
+from retarget.network.preprocess import NormStats
 from retarget.world import MotionWorld
 from tests.retarget.evaluate.helpers import TINY
 

@@ -8,10 +8,10 @@ import pytest
 from pose_io.clean import smooth_joints
 from pose_io.measures import skeleton_height
 from pose_io.track import PoseTrack
-from retarget.baselines import global_scale_retarget
+from retarget.baselines.methods import global_scale_retarget
 from retarget.evaluate.real import markdown_rows, pair_scores, real_pair_results, wrist_rise
-from retarget.preprocess import LAYOUT, ROOT
-from retarget.tracks import body15_track, filled_body15
+from retarget.inference.tracks import body15_track, filled_body15
+from retarget.network.preprocess import LAYOUT, ROOT
 
 
 def _smaller(track: PoseTrack) -> PoseTrack:

@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from retarget.evaluate import BASELINES, OFFICIAL_FILES, REFERENCES_3D
-from retarget.inference_config import REFINE_STEPS
+from retarget.inference.config import REFINE_STEPS
 from tests.retarget.evaluate.helpers import TINY
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from retarget.evaluate import case_scores, offset_aligned, pose_errors, root_aligned
 from retarget.evaluate.scores import summarise
-from retarget.preprocess import ROOT_INDEX
+from retarget.network.preprocess import ROOT_INDEX
 
 
 def test_identical_poses_score_perfectly() -> None:

@@ -6,8 +6,9 @@ import numpy as np
 import torch
 
 from pose_io import BODY15
-from retarget.checkpoint import load_checkpoint
-from retarget.train import CrossSamples, TrainConfig
+from retarget.network.checkpoint import load_checkpoint
+from retarget.training.config import TrainConfig
+from retarget.training.data import CrossSamples
 
 _PARENT = {
     "neck": "mid_hip", "nose": "neck", "r_shoulder": "neck", "r_elbow": "r_shoulder", "r_wrist": "r_elbow",

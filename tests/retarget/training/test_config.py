@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from retarget.augment import AugmentConfig
-from retarget.model import variant_config
-from retarget.train import TrainConfig
+from retarget.network.model import variant_config
+from retarget.training.augment import AugmentConfig
+from retarget.training.config import TrainConfig
 
 
 def test_config_round_trip_and_validation():

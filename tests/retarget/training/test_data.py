@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from pose_io import InputError
-from retarget.augment import combo_index
-from retarget.train import CrossSamples, TrainConfig, body_scales, character_heights
+from retarget.training.augment import combo_index
+from retarget.training.config import TrainConfig
+from retarget.training.data import CrossSamples, body_scales, character_heights
 from tests.retarget.training.fake_split import TINY, CameraSplit, FakeSplit
 
 

@@ -10,8 +10,10 @@ import torch
 
 from pose_io import InputError, PoseTrack
 from retarget.api import load_retargeter
-from retarget.checkpoint import load_checkpoint
-from retarget.train import TrainConfig, fit, mean_pose_height, retargeting_error
+from retarget.network.checkpoint import load_checkpoint
+from retarget.training.config import TrainConfig
+from retarget.training.data import mean_pose_height
+from retarget.training.loop import fit, retargeting_error
 from tests.retarget.training.fake_split import TINY, FakeSplit, weights_of
 
 

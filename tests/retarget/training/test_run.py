@@ -7,8 +7,8 @@ import shutil
 import pytest
 
 from pose_io import InputError
-from retarget.checkpoint import load_checkpoint
-from retarget.train import train
+from retarget.network.checkpoint import load_checkpoint
+from retarget.training.run import train
 from tests.retarget.training.fake_split import TINY
 
 
@@ -26,7 +26,7 @@ def test_train_on_a_motion_world_built_from_mocap(shared_dir, tmp_path):
 
 
 def test_real_tracks_are_read_from_openpose_folders(shared_dir, tmp_path):
-    from retarget.train import read_real_tracks
+    from retarget.training.run import read_real_tracks
 
     for clip in ("tall_man", "small_man"):
         shutil.copytree(shared_dir / "openpose_examples" / clip, tmp_path / "real" / clip)

@@ -5,10 +5,12 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from retarget.augment import AugmentConfig
-from retarget.losses import objective
-from retarget.model import RetargetNet
-from retarget.train import TrainConfig, batch_tensors, split_statistics, train_step
+from retarget.network.model import RetargetNet
+from retarget.training.augment import AugmentConfig
+from retarget.training.config import TrainConfig
+from retarget.training.data import split_statistics
+from retarget.training.losses import objective
+from retarget.training.step import batch_tensors, train_step
 from tests.retarget.training.fake_split import FakeSplit, batch_of
 
 

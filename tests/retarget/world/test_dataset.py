@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from pose_io import atomic
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
-from retarget.windows import strided_starts
+from retarget.inference.windows import strided_starts
 from retarget.world import (
     MAX_PITCH,
     NAMED_CHARACTERS,
