@@ -75,8 +75,6 @@ log = logging.getLogger(__name__)
 
 DEFAULT_FPS = 30.0
 _SIZE_STEP = 16
-#: Pose files a folder of tracks may hold (an OpenPose folder is one track too).
-TRACK_SUFFIXES = (".npz", ".npy", ".csv", ".json")
 
 __all__ = [
     "LAYOUT_BY_JOINTS", "READERS", "TrackSummary", "detect_format",
@@ -86,11 +84,6 @@ __all__ = [
 
 
 # ----------------------------------------------------------------------------------------------- entry points
-
-
-def is_openpose_folder(path: Path) -> bool:
-    """A folder holding ``*_keypoints.json`` frames: one track."""
-    return path.is_dir() and any(path.glob("*_keypoints.json"))
 
 
 def read_track(

@@ -82,9 +82,10 @@ def apply(
 ) -> None:
     """Retarget MOTION_POSES onto the person of --skeleton; write body15 poses in that person's frame."""
     from pose_io.errors import InputError
+    from pose_io.folders import find_tracks
     from pose_io.outputs import FOLDER, check_number, check_output
     from pose_io.readers import parse_size, read_track
-    from retarget.inference.batch import find_motions, is_batch, retarget_files
+    from retarget.inference.batch import is_batch, retarget_files
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
@@ -97,7 +98,7 @@ def apply(
         if preview is not None:
             raise InputError("--preview draws one result; it takes a single input")
         fmt = to.value if to is not None else "npz"
-        motions = find_motions(motion_poses)
+        motions = [f.path for f in find_tracks(motion_poses, recursive=False, duplicates="refuse")]
         outputs = _batch_outputs(out, motions, fmt, overwrite)
     else:
         if to is not None:

@@ -1,6 +1,6 @@
 """Retargeting many pose files in one process: find them, name their outputs, run them through the network together.
 
-    motions = find_motions(["clips/"])                       # files and OpenPose folders
+    motions = [f.path for f in find_tracks(["clips/"], recursive=False, duplicates="refuse")]  # pose_io.folders
     outputs = batch_outputs(motions, Path("out"), "npz")     # out/<name>.npz, clashes refused
     retarget_files(retargeter, reference, motions, outputs, fmt="npz")
 
@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from pose_io.errors import InputError
-from pose_io.readers import TRACK_SUFFIXES, is_openpose_folder
+from pose_io.folders import is_openpose_folder
 from pose_io.track import PoseTrack
 from pose_io.writers import write_track
 from retarget.inference.algorithm import RetargeterBase
@@ -25,40 +25,10 @@ from retarget.inference.config import PreparedMotion, ReferenceCodes
 
 log = logging.getLogger(__name__)
 
+
 def is_batch(inputs: Sequence[Path]) -> bool:
     """Whether the inputs name several clips: more than one path, or a folder that is not one OpenPose track."""
     return len(inputs) > 1 or (len(inputs) == 1 and inputs[0].is_dir() and not is_openpose_folder(inputs[0]))
-
-
-def find_motions(inputs: Sequence[Path]) -> list[Path]:
-    """The clips the inputs name, in order: files and OpenPose folders as given; of another folder, its pose
-    files (:data:`TRACK_SUFFIXES`) and OpenPose sub-folders, sorted by name (not recursive, hidden ones skipped).
-
-    Raises:
-        InputError: a path that does not exist, a folder without clips, or a clip named twice.
-    """
-    found: list[Path] = []
-    for item in inputs:
-        if not item.exists():
-            raise InputError(f"{item}: no such file or folder")
-        if item.is_file() or is_openpose_folder(item):
-            found.append(item)
-            continue
-        inside = sorted(
-            p for p in item.iterdir()
-            if not p.name.startswith(".")
-            and ((p.is_file() and p.suffix.lower() in TRACK_SUFFIXES) or is_openpose_folder(p))
-        )  # fmt: skip
-        if not inside:
-            raise InputError(f"{item}: no pose files ({', '.join(TRACK_SUFFIXES)}) or OpenPose folders in it")
-        found.extend(inside)
-    seen: dict[Path, Path] = {}
-    for path in found:
-        key = path.resolve()
-        if key in seen:
-            raise InputError(f"{path}: named twice (also as {seen[key]})")
-        seen[key] = path
-    return found
 
 
 def output_name(motion: Path, fmt: str) -> str:

@@ -31,7 +31,7 @@ import torch
 
 from pose_io.atomic import atomic_file
 from pose_io.errors import InputError
-from pose_io.readers import TRACK_SUFFIXES, is_openpose_folder
+from pose_io.folders import find_tracks
 from pose_io.track import PoseTrack
 from retarget.applications.search.features import TrackEncoder, track_features
 
@@ -139,44 +139,6 @@ class Skipped:
     reason: str
 
 
-def find_tracks(inputs: Iterable[str | os.PathLike]) -> list[tuple[Path, bool]]:
-    """Tracks named by the user: files and OpenPose folders as given, other folders searched recursively.
-
-    A folder walk takes ``.npz``, ``.npy``, ``.csv`` and ``.json`` files and OpenPose folders (a folder with
-    ``*_keypoints.json`` frames is one track), in sorted order, and skips hidden files and folders. A track
-    reached twice (a file named and also inside a named folder) is listed once.
-
-    Returns:
-        (path, named) in a stable order; ``named`` is False for tracks found inside a folder (those may be
-        skipped when unreadable, a named one may not).
-
-    Raises:
-        InputError: a named path that does not exist.
-    """
-    out: dict[Path, tuple[Path, bool]] = {}
-
-    def add(path: Path, named: bool) -> None:
-        first, was_named = out.get(path.resolve(), (path, False))
-        out[path.resolve()] = (first, was_named or named)
-
-    for item in map(Path, inputs):
-        if not item.exists():
-            raise InputError(f"{item}: no such file or folder")
-        if item.is_file() or is_openpose_folder(item):
-            add(item, True)
-            continue
-        for root, dirs, files in os.walk(item):
-            here = Path(root)
-            dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-            for d in [d for d in dirs if is_openpose_folder(here / d)]:
-                dirs.remove(d)  # an OpenPose folder is one track: its frames are not walked
-                add(here / d, False)
-            for f in sorted(files):
-                if f.lower().endswith(TRACK_SUFFIXES) and not f.startswith("."):
-                    add(here / f, False)
-    return list(out.values())
-
-
 def build_index(
     inputs: Iterable[str | os.PathLike],
     encoder: TrackEncoder,
@@ -186,7 +148,7 @@ def build_index(
     """Encode every track once and gather the features.
 
     Args:
-        inputs: files and folders (see :func:`find_tracks`).
+        inputs: files and folders, searched recursively (:func:`pose_io.folders.find_tracks`).
         encoder: a :class:`~retarget.applications.search.features.TrackEncoder`.
         read: reads one track (default :func:`pose_io.readers.read_track`).
         progress: called as ``progress(done, total, path)``.
@@ -199,7 +161,7 @@ def build_index(
     """
     if read is None:
         from pose_io.readers import read_track as read
-    found = find_tracks(inputs)
+    found = [(f.path, f.named) for f in find_tracks(inputs, recursive=True)]
     sequences, paths, fps, frames, skipped = [], [], [], [], []
     for k, (path, named) in enumerate(found):
         if progress is not None:

@@ -10,9 +10,10 @@ import pytest
 import torch
 
 from pose_io.errors import InputError
+from pose_io.folders import find_tracks
 from pose_io.track import PoseTrack
 from pose_io.writers import write_track
-from retarget.applications.search import build_index, find_tracks, load_index, save_index, search
+from retarget.applications.search import build_index, load_index, save_index, search
 from tests.figures import walking_figure
 from tests.retarget.applications.search.moving import FRAMES
 
@@ -27,12 +28,12 @@ def _write_collection(root: Path, tracks: list[PoseTrack]) -> None:
 
 def test_index_round_trip(encoder, tracks, tmp_path):
     _write_collection(tmp_path / "tracks", tracks)
-    found = find_tracks([tmp_path / "tracks"])
-    names = sorted(p.name for p, _ in found)
+    found = find_tracks([tmp_path / "tracks"], recursive=True)  # what build_index walks
+    names = sorted(f.path.name for f in found)
     assert names == ["first.npz", "notes.json", "second", "third.csv"]
-    assert not any(named for _, named in found)
-    again = find_tracks([tmp_path / "tracks" / "third.csv", tmp_path / "tracks"])  # reached twice: listed once
-    assert (again[0][0].name, again[0][1]) == ("third.csv", True) and len(again) == 4
+    assert not any(f.named for f in found)
+    again = find_tracks([tmp_path / "tracks" / "third.csv", tmp_path / "tracks"], recursive=True)  # listed once
+    assert (again[0].path.name, again[0].named) == ("third.csv", True) and len(again) == 4
     calls = []
     index, skipped = build_index([tmp_path / "tracks"], encoder, progress=lambda d, t, p: calls.append((d, t)))
     assert [Path(s.path).name for s in skipped] == ["notes.json"]
