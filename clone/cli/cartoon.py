@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 
 from clone.cli.common import DEVICE_HELP, MAX_REFINE_STEPS, RefineStepsOption, console, user_errors
+from clone.cli.progress import progress_bar
 
 _CHARACTER_HELP = (
     "A preset (standard, bighead, stubby, longarms, chibi) or a JSON file of part factors on a standard body, "
@@ -49,8 +50,6 @@ def cartoon_command(
     import json
     import time
 
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
     from clone.drive.run import load_driving_retargeter
     from pose_io.atomic import atomic_file
@@ -76,12 +75,11 @@ def cartoon_command(
     configure_threads()
     retargeter = load_driving_retargeter(weights, device, refine_steps)
     cartoon = make_cartoon(track, spec, retargeter, yaw=yaw, name=str(driver))
-    with Progress(TextColumn("[bold]drawing"), BarColumn(), MofNCompleteColumn(), console=console,
-                  transient=True) as bar, VideoWriter(out, track.fps, overwrite=overwrite) as video:  # fmt: skip
-        task = bar.add_task("drawing", total=len(cartoon.track))
-        for frame in cartoon_frames(cartoon.track, cartoon.look):
+    with progress_bar("drawing", remaining=False) as bar, \
+            VideoWriter(out, track.fps, overwrite=overwrite) as video:
+        for t, frame in enumerate(cartoon_frames(cartoon.track, cartoon.look)):
             video.write(frame)
-            bar.advance(task)
+            bar(t + 1, len(cartoon.track))
     if poses is not None:
         write_track(cartoon.track, poses, overwrite=overwrite)
     document = {**cartoon.report, "driver": str(driver), "video": str(out),

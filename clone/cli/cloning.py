@@ -25,6 +25,7 @@ from clone.cli.common import (
     training_device,
     user_errors,
 )
+from clone.cli.progress import progress_bar
 from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
@@ -85,10 +86,9 @@ def train_ref(
 
     Runs unchanged under torchrun (one process per CPU share or GPU); rank 0 reports and writes the model.
     """
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from clone.model.reference import preview_path
-    from clone.train_ref import TrainConfig, TrainProgress, train_reference
+    from clone.train_ref import StepProgress, TrainConfig, train_reference
     from pose_io.outputs import check_number, check_output
     from retarget.training import distributed
 
@@ -122,22 +122,19 @@ def train_ref(
         config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1,
                              background=background is not False)
 
-    with distributed.launched(dev) as dev, Progress(
-        TextColumn("[bold]train-ref"), BarColumn(), TextColumn("{task.fields[info]}"), TimeElapsedColumn(),
-        TimeRemainingColumn(), console=console, transient=True, disable=not distributed.current().is_main,
-    ) as bar:
-        task = bar.add_task("train", total=None, info="reading frames")
+    with distributed.launched(dev) as dev, \
+            progress_bar("train-ref", count=False, elapsed=True, enabled=distributed.current().is_main) as bar:
 
-        def update(p: TrainProgress) -> None:
+        def update(p: StepProgress) -> None:
             if p.phase == "reading":
-                bar.update(task, completed=p.step, total=p.total, info=f"reading frames {p.step}/{p.total}")
+                bar(p.step, p.total, text=f"reading frames {p.step}/{p.total}")
                 return
             losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
-            info = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
+            text = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
             if p.total is not None:
-                bar.update(task, completed=p.step, total=p.total, info=info)
+                bar(p.step, p.total, text=text)
             else:
-                bar.update(task, completed=p.elapsed, total=p.limit_s, info=info)
+                bar(p.elapsed, p.limit_s, text=text)
 
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
@@ -193,8 +190,6 @@ def drive(
     refine_steps: RefineStepsOption = None,
 ) -> None:
     """Make a video of the reference performing the driver's motion."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
     from clone.drive.run import drive as run_drive
     from pose_io.outputs import FOLDER, check_number, check_output
 
@@ -207,14 +202,12 @@ def drive(
         if poses_out.absolute() == out.absolute():
             raise InputError(f"--poses-out {poses_out}: the same path as --out")
     dev = resolve_device_option(device, threads)
-    with Progress(TextColumn("[bold]drive"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:
-        task = bar.add_task("drive", total=None)
+    with progress_bar("drive") as bar:
         result = run_drive(
             drive_poses, out, model_path=model, method=method.value, stage=stage.value, poses_out=poses_out,
             side_by_side=side_by_side, foot_lock=foot_lock, refine_steps=refine_steps,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap, runtime=runtime,
-            progress=lambda done, total: bar.update(task, completed=done, total=total),
+            progress=bar,
         )
     console.print(f"wrote {result.out}: {result.frames} frames {result.size[0]}x{result.size[1]} at "
                   f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)")

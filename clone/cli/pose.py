@@ -6,8 +6,6 @@ Pose libraries (numpy, OpenCV, imageio-ffmpeg, MediaPipe) are imported inside th
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -16,6 +14,7 @@ from rich.console import Console
 
 from clone.cli.choices import Layout, OutputFormat, PoseFormat
 from clone.cli.common import console, user_errors
+from clone.cli.progress import progress_bar
 from pose_io.limits import MAX_FPS  # one limit for the library and the options
 
 if TYPE_CHECKING:
@@ -45,21 +44,6 @@ def _read(poses: Path, fmt: PoseFormat | None, person: int | None, size: str | N
     image_size = parse_size(size) if size else None
     return read_track_summary(poses, fmt.value if fmt is not None else None, person=person, fps=in_fps, image_size=image_size,
                               fallback_size=frames_size)
-
-
-@contextmanager
-def _progress(label: str) -> Iterator[Callable[[int, int], None]]:
-    """A rich progress bar on stderr; yields ``update(done, total)``."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    with Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:
-        task = bar.add_task(label, total=None)
-
-        def update(done: int, total: int) -> None:
-            bar.update(task, completed=done, total=total or None)
-
-        yield update
 
 
 @pose_app.command("info")
@@ -140,7 +124,7 @@ def show(
     if background is not None and background.num_frames != track.num_frames:
         console.print(f"note: {frames} has {background.num_frames} frames, the poses {track.num_frames}",
                       highlight=False)
-    with _progress("drawing") as update:
+    with progress_bar("drawing") as update:
         write_pose_video(track, out, background=background, overwrite=overwrite, progress=update)
     w, h = background.size if background is not None else track.image_size
     typer.echo(f"wrote {out} ({track.num_frames} frames, {w}x{h}, {track.fps:g} fps)")
@@ -221,7 +205,7 @@ def extract(
     if not video.exists():
         raise InputError(f"{video}: no such video or image folder")
     from pose_io.extract import ExtractConfig, extract_video  # MediaPipe: only once the arguments are good
-    with _progress("extracting") as update:
+    with progress_bar("extracting") as update:
         result = extract_video(video, out, overwrite=overwrite, config=ExtractConfig(min_visibility=min_visibility),
                                progress=update)
     typer.echo(f"wrote {result.poses_dir} and {result.frames_dir} "

@@ -12,6 +12,7 @@ import typer
 
 from clone.cli.choices import StageMode
 from clone.cli.common import DEVICE_HELP, MAX_REFINE_STEPS, RefineStepsOption, console, user_errors
+from clone.cli.progress import progress_bar
 
 # The primary pose measure first (with ground truth), as on the page; rows a run lacks are left out.
 _HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssim", "psnr_background",
@@ -54,7 +55,6 @@ def report_command(
     refine_steps: RefineStepsOption = None,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
     from rich.table import Table
 
     from clone.metrics import METRICS
@@ -74,12 +74,10 @@ def report_command(
     except ValueError as exc:
         raise InputError(str(exc)) from None
     configure_threads()
-    columns = (TextColumn("report"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=True) as bar:
-        task = bar.add_task("report", total=None)
+    with progress_bar("report") as bar:
         run = make_report(
             drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
-            device=dev, weights=weights, progress=lambda done, total: bar.update(task, completed=done, total=total),
+            device=dev, weights=weights, progress=bar,
             stage=stage.value, refine_steps=refine_steps,
         )  # fmt: skip
     table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")

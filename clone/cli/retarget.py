@@ -8,8 +8,6 @@ torch and the pose readers are imported inside the commands so that `clone --hel
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated
 
@@ -24,6 +22,7 @@ from clone.cli.common import (
     console,
     user_errors,
 )
+from clone.cli.progress import progress_bar
 from clone.cli.retarget_cloning import eval_cloning
 from clone.cli.retarget_eval import evaluate
 from clone.cli.retarget_train import train
@@ -119,7 +118,7 @@ def apply(
 
         retargeter = FootLockedRetargeter(retargeter)
     if batch:
-        with _progress("retargeting") as update:
+        with progress_bar("retargeting") as update:
             frames = retarget_files(retargeter, codes, motions, outputs, fmt=fmt, overwrite=overwrite,
                                     read=lambda p: read_track(p, image_size=image_size), progress=update)  # fmt: skip
         console.print(f"wrote {len(outputs)} {'clip' if len(outputs) == 1 else 'clips'} to {out} ({frames:,} frames, "
@@ -173,17 +172,6 @@ def _retargeter(
 
         configure_threads(threads)
     return retargeter
-
-
-@contextlib.contextmanager
-def _progress(what: str) -> Iterator[Callable[[int, int], None]]:
-    """A transient progress bar; yields ``update(done, total)``."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    with Progress(TextColumn(what), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(), console=console,
-                  transient=True) as bar:  # fmt: skip
-        task = bar.add_task(what, total=None)
-        yield lambda done, total: bar.update(task, completed=done, total=total)
 
 
 retarget_app.command("train")(train)

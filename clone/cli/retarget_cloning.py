@@ -25,6 +25,7 @@ from clone.cli.common import (
     named_checkpoints,
     user_errors,
 )
+from clone.cli.progress import progress_bar
 
 MAX_CLIPS = 100_000
 
@@ -52,7 +53,6 @@ def eval_cloning(
     the child at -30°) and their ground truth (the demo's reference character at +30°); every driver is moved onto
     the demo's reference track as `clone drive` does it. Global scaling is scored on the same cases.
     """
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from clone.demo import validation
     from clone.demo.scenes import reference_track
@@ -80,10 +80,8 @@ def eval_cloning(
     world = MotionWorld.build(mocap, cache, seed=world_seed)
     cases = validation.cloning_cases(world.split(split.value).clips, mocap, frames, clips, config,
                                      world.config.fps)  # fmt: skip
-    with Progress(TextColumn("[bold]eval-cloning"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:  # fmt: skip
-        task = bar.add_task("cases", total=len(cases))
-        errors = validation.score(cases, methods, lambda done, _: bar.update(task, completed=done))
+    with progress_bar("eval-cloning") as bar:
+        errors = validation.score(cases, methods, lambda done, _: bar(done, len(cases)))
     doc = validation.summarise(cases, errors, "ours")
     doc.update({
         "split": split.value, "frames": frames, "baseline": "ours",

@@ -26,6 +26,7 @@ from clone.cli.common import (
     named_checkpoints,
     user_errors,
 )
+from clone.cli.progress import progress_bar
 from retarget.inference.config import REFINE_STEPS  # numpy and pose_io only: light for the command line
 
 # Ranges of options that scale time or memory, checked before any work (and MAX_CLIP_FRAMES).
@@ -92,7 +93,6 @@ def evaluate(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Retargeting error of our network vs baselines on unseen motions and characters, and code silhouettes."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from pose_io.errors import InputError
     from pose_io.outputs import FOLDER, check_number, check_output
@@ -121,9 +121,7 @@ def evaluate(
         real_tracks = dict(read_real_tracks(real, named=True))
     configure_threads(threads)
     world = MotionWorld.build(mocap, cache, seed=world_seed)
-    with Progress(TextColumn("[bold]eval"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:  # fmt: skip
-        task = bar.add_task("eval", total=None)
+    with progress_bar("eval") as bar:
         doc, table = run_eval(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, reference_length=reference_length, seed=seed, max_yaw=max_yaw,
@@ -132,7 +130,7 @@ def evaluate(
             fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed, refine_steps=refine_steps,
             probe_split=world.split("train") if probe_steps else None,
-            progress=lambda done, total: bar.update(task, completed=done, total=total),
+            progress=bar,
         )
     typer.echo(table)
     console.print(f"wrote {out}: eval.json, eval.md and {len(doc['silhouettes'])} code plots in {doc['seconds']:.0f} s")

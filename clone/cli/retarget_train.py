@@ -12,6 +12,7 @@ import typer
 
 from clone.cli.choices import Ablation, Variant
 from clone.cli.common import DEVICE_HELP, MAX_THREADS, WorldCacheOption, console, training_device, user_errors
+from clone.cli.progress import progress_bar
 
 # Ranges of options that scale time or memory, checked before any work.
 MAX_MINUTES = 7 * 24 * 60.0
@@ -138,15 +139,13 @@ def train(
     """
     import dataclasses
 
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
     from pose_io.errors import InputError
     from pose_io.outputs import check_number, check_output
     from retarget.training import distributed
     from retarget.training.config import TrainConfig
     from retarget.training.losses import ablation_config
     from retarget.training.run import train as run_training
-    from retarget.training.state import TrainProgress
+    from retarget.training.state import EpochProgress
     from retarget.world import CameraSpread
 
     check_output(out, "--out", overwrite=True)  # rewritten after every epoch; --resume continues it
@@ -190,19 +189,16 @@ def train(
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)
-    with distributed.launched(dev) as dev, Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-        TextColumn("{task.fields[losses]}"), console=console, disable=not distributed.current().is_main,
-        transient=True,  # an error ends as its one line; the summary below says where the run ended
-    ) as bar:
-        task = bar.add_task("epoch 1", total=None, losses="")
+    # the bar is transient: an error ends as its one line; the summary below says where the run ended
+    with distributed.launched(dev) as dev, \
+            progress_bar("epoch 1", elapsed=True, remaining=False, enabled=distributed.current().is_main) as bar:
 
-        def update(p: TrainProgress) -> None:
+        def update(p: EpochProgress) -> None:
             shown = {k: v for k, v in p.losses.items() if k not in ("epoch", "seconds")}
             if p.step == p.steps_per_epoch and "epoch" in p.losses:  # the epoch's record
                 shown = {k: v for k, v in shown.items() if k.startswith("val_")} or shown
             text = " ".join(f"{k}={v:.3f}" for k, v in shown.items())
-            bar.update(task, description=f"epoch {p.epoch}", completed=p.step, total=p.steps_per_epoch, losses=text)
+            bar(p.step, p.steps_per_epoch, text=text, label=f"epoch {p.epoch}")
 
         summary = run_training(
             mocap, out, cache_dir=cache, real_dir=real, config=config, device=dev, epochs=epochs,

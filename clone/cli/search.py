@@ -20,6 +20,7 @@ from clone.cli.common import (
     resolve_device_option,
     user_errors,
 )
+from clone.cli.progress import progress_bar
 
 search_app = typer.Typer(
     help="Motion retrieval: index pose tracks by their motion codes, then find a query's motion in them.",
@@ -47,7 +48,6 @@ def index(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Encode the motion of every track once and write the index to --out."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from pose_io.outputs import check_number, check_output
     from pose_io.readers import parse_size, read_track
@@ -59,12 +59,10 @@ def index(
     image_size = parse_size(size) if size else None
     dev = resolve_device_option(device, threads)
     encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
-    with Progress(TextColumn("indexing"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:  # fmt: skip
-        task = bar.add_task("indexing", total=None)
+    with progress_bar("indexing") as bar:
         built, skipped = build_index(
             tracks, encoder, read=lambda p: read_track(p, image_size=image_size),
-            progress=lambda done, total, _: bar.update(task, completed=done, total=total),
+            progress=lambda done, total, _: bar(done, total),
         )
     save_index(built, out, overwrite=overwrite)
     if skipped:
@@ -145,7 +143,6 @@ def evaluate(
 ) -> None:
     """Retrieval accuracy on the motion world's test split: motion codes against raw joints, each query's motion
     to be found performed by another character, seen at least --min-view-gap degrees of yaw away."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
@@ -172,11 +169,9 @@ def evaluate(
     dev = resolve_device_option(device, threads)
     encoder = MotionCodeEncoder(load_retargeter(weights, str(dev)))
     world = MotionWorld.build(mocap, cache, seed=world_seed)
-    with Progress(TextColumn("queries"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                  console=console, transient=True) as bar:  # fmt: skip
-        task = bar.add_task("queries", total=None)
+    with progress_bar("queries") as bar:
         doc = evaluate_retrieval(world.split("test"), encoder, config, fps=world.config.fps,
-                                 progress=lambda done, total: bar.update(task, completed=done, total=total))
+                                 progress=bar)
     typer.echo(summary(doc))
     typer.echo(markdown_table(doc))
     if out is not None:

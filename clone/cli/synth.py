@@ -13,7 +13,8 @@ from typing import Annotated
 
 import typer
 
-from clone.cli.common import console, user_errors
+from clone.cli.common import user_errors
+from clone.cli.progress import progress_bar
 
 _SLEEVES = {"long": "long-sleeved", "short": "short-sleeved", "none": "sleeveless"}
 
@@ -39,7 +40,6 @@ def render_command(
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out folder.")] = False,
 ) -> None:
     """Render MOTION performed by a character, framed by the world's framing rule."""
-    from rich.progress import Progress
 
     from clone.synth import get_character, save_performance
     from pose_io.errors import InputError
@@ -68,10 +68,9 @@ def render_command(
         raise InputError(f"{motion}: --frames {frames} does not fit: {clip.num_frames - start} frames from --start {start}")
     count = (clip.num_frames - start) if frames is None else frames
     extra = {"character": {"requested": character, "seed": seed}}
-    with Progress(console=console, transient=True) as progress:
-        task = progress.add_task(f"rendering {clip.name}", total=count)
+    with progress_bar(f"rendering {clip.name}") as bar:
         save_performance(out, clip, skeleton, look, yaw, pitch, size, start, frames, overwrite=overwrite,
-                         extra_meta=extra, on_frame=lambda _: progress.advance(task))
+                         extra_meta=extra, on_frame=lambda t: bar(t + 1, count))
     typer.echo(f"wrote {out} ({count} frames, {size}x{size}, {skeleton.name} as {look.name})")
 
 

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from clone.cli.common import WorldCacheOption, console, user_errors
+from clone.cli.common import WorldCacheOption, user_errors
+from clone.cli.progress import progress_bar
 
 if TYPE_CHECKING:
     from retarget.world.cache import CachedWorld
@@ -37,7 +38,6 @@ def build(
     rebuild: Annotated[bool, typer.Option("--rebuild", help="Build again even if the cache has this world.")] = False,
 ) -> None:
     """Build (or open from the cache) the motion world and print its summary."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from pose_io.errors import InputError
     from pose_io.outputs import check_number, check_writable_folder
@@ -56,14 +56,10 @@ def build(
             raise InputError(f"--cache {cache}: is a file; give a folder")
         check_writable_folder(cache, f"--cache {cache}")
     started = time.perf_counter()
-    with Progress(
-        TextColumn("loading mocap"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-        TextColumn("{task.description}"), console=console, transient=True,
-    ) as bar:
-        task = bar.add_task("", total=None)
+    with progress_bar("loading mocap", elapsed=True, remaining=False) as bar:
 
         def progress(done: int, total: int, what: str) -> None:
-            bar.update(task, completed=done, total=total, description=what)
+            bar(done, total, text=what)
 
         world = MotionWorld.build(
             mocap, cache, seed=seed, fps=fps, n_train_characters=train_characters,

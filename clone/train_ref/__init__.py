@@ -42,7 +42,7 @@ from clone.train_ref.data import (
 )
 from clone.train_ref.loop import TrainResult, train_reference
 from clone.train_ref.preview import preview_grid, preview_rows, write_png
-from clone.train_ref.state import ProgressFn, TrainProgress
+from clone.train_ref.state import ProgressFn, StepProgress
 from clone.train_ref.trainer import Trainer
 
 __all__ = [
@@ -52,8 +52,8 @@ __all__ = [
     "ProgressFn",
     "ReferenceData",
     "ReferenceInfo",
+    "StepProgress",
     "TrainConfig",
-    "TrainProgress",
     "TrainResult",
     "Trainer",
     "checkpoint_model",

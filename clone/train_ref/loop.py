@@ -43,8 +43,8 @@ from clone.train_ref.data import (
 from clone.train_ref.preview import preview_grid, preview_rows, write_png
 from clone.train_ref.state import (
     ProgressFn,
+    StepProgress,
     TrainingRun,
-    TrainProgress,
     check_options,
     previous_and_config,
     start_run,
@@ -202,7 +202,7 @@ def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarra
         if i >= count:
             break
         store[i] = cut_frame(frame, canvas)
-        run.report(TrainProgress("reading", i + 1, count, run.elapsed(), None, {}))
+        run.report(StepProgress("reading", i + 1, count, run.elapsed(), None, {}))
     log.info("read %d frames in %.1f s", count, run.elapsed())
     return ReferenceData(store, image_to_canvas(run.reference.track.joints, canvas), usable, canvas.size)
 
@@ -246,7 +246,7 @@ def _train_steps(
             if save_due:
                 run.save()
                 last_save = time.perf_counter()
-            run.report(TrainProgress("training", trainer.step_count, steps, run.elapsed(), limit_s, losses))
+            run.report(StepProgress("training", trainer.step_count, steps, run.elapsed(), limit_s, losses))
     except KeyboardInterrupt:
         log.warning("interrupted at step %d; saving", trainer.step_count)
         return losses, True

@@ -22,8 +22,9 @@ from retarget.training import distributed
 
 
 @dataclass
-class TrainProgress:
-    """Where a run stands, passed to the progress callback after every step (and every frame read).
+class StepProgress:
+    """Where a reference model's training stands, passed to the progress callback after every step (and every
+    frame read); the retargeting trainer's counterpart, per epoch, is :class:`retarget.training.state.EpochProgress`.
 
     While ``phase`` is ``"reading"``, ``step`` counts frames read out of ``total``.
     """
@@ -36,7 +37,7 @@ class TrainProgress:
     losses: dict[str, float]
 
 
-ProgressFn = Callable[[TrainProgress], None]
+ProgressFn = Callable[[StepProgress], None]
 
 
 @dataclass
@@ -68,7 +69,7 @@ class TrainingRun:
             save_checkpoint(self.out, self.trainer, self.reference, self.config, self.rng, self.total_seconds())
         distributed.barrier()
 
-    def report(self, progress: TrainProgress) -> None:
+    def report(self, progress: StepProgress) -> None:
         """Hand ``progress`` to the progress callback, on rank 0 only."""
         if self.progress is not None and self.world.is_main:
             self.progress(progress)

@@ -18,7 +18,7 @@ from retarget.network.checkpoint import RetargetWeights, save_checkpoint
 from retarget.training import distributed
 from retarget.training.config import DEFAULT_CONFIG, TrainConfig
 from retarget.training.data import CrossSamples, WorldSplit, batch_loader, body_scales, validation_set
-from retarget.training.state import ProgressFn, TrainingRun, TrainProgress, begin_run, start_run
+from retarget.training.state import EpochProgress, ProgressFn, TrainingRun, begin_run, start_run
 from retarget.training.step import evaluate, train_step
 
 log = logging.getLogger(__name__)
@@ -173,7 +173,7 @@ def fit(
                 log.info("epoch %d: lowest validation retargeting error so far (%.4f); weights in %s", run.epoch,
                          score, best)  # fmt: skip
         run.save()
-        run.report(TrainProgress(run.epoch, run.steps_per_epoch, run.steps_per_epoch, run.global_step, record))
+        run.report(EpochProgress(run.epoch, run.steps_per_epoch, run.steps_per_epoch, run.global_step, record))
         if world.is_main:
             log.info("epoch %d: %s", run.epoch, _format(record))
         if distributed.any_rank(time.monotonic() > deadline):
@@ -215,7 +215,7 @@ def _train_epoch(run: TrainingRun, loader: Iterable[dict[str, torch.Tensor]]) ->
         counted += 1
         run.step_in_epoch += 1
         run.global_step += 1
-        run.report(TrainProgress(run.epoch + 1, run.step_in_epoch, run.steps_per_epoch, run.global_step, losses))
+        run.report(EpochProgress(run.epoch + 1, run.step_in_epoch, run.steps_per_epoch, run.global_step, losses))
         if late and run.step_in_epoch < run.steps_per_epoch:
             return sums, counted, True
     return sums, counted, False

@@ -36,7 +36,7 @@ from retarget.training.step import TrainLoss, character_proportions
 
 
 @dataclass(frozen=True)
-class TrainProgress:
+class EpochProgress:
     """Where a training run stands, passed to a progress callback after every step and every epoch.
 
     Attributes:
@@ -55,7 +55,7 @@ class TrainProgress:
     losses: dict[str, float]
 
 
-ProgressFn = Callable[[TrainProgress], None]
+ProgressFn = Callable[[EpochProgress], None]
 
 
 class RunStart(NamedTuple):
@@ -163,7 +163,7 @@ class TrainingRun:
             })
         distributed.barrier()
 
-    def report(self, update: TrainProgress) -> None:
+    def report(self, update: EpochProgress) -> None:
         """Hand ``update`` to the progress callback, on rank 0 only."""
         if self.progress is not None and self.world.is_main:
             self.progress(update)

@@ -75,10 +75,10 @@ def test_bad_options_are_one_line_errors(reference, tmp_path):
 
 
 def test_progress_goes_to_the_callback(reference, tmp_path):
-    from clone.train_ref import TrainConfig, TrainProgress, train_reference
+    from clone.train_ref import StepProgress, TrainConfig, train_reference
 
     poses, frames = reference
-    seen: list[TrainProgress] = []
+    seen: list[StepProgress] = []
     result = train_reference(poses, frames, tmp_path / "ref.pt", config=TrainConfig(size=32), steps=2,
                              device=torch.device("cpu"), progress=seen.append)
     reading = [p for p in seen if p.phase == "reading"]
