@@ -8,20 +8,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from pose_io import fill_gaps, read_track, smooth, write_track
-from pose_io.measures import reference_limb_lengths, skeleton_height
+from pose_io.measures import proportion_error
 from pose_io.video_out import write_pose_video
 from retarget.api import load_retargeter
 from retarget.baselines.methods import global_scale_retarget
-
-
-def limb_error_pct(track, reference) -> float:
-    """Mean |limb length - the reference's median limb length|, in % of the reference's height."""
-    ref = reference_limb_lengths(reference.joints, reference.layout)
-    own = reference_limb_lengths(track.joints, track.layout)
-    return float(np.mean(np.abs(own - ref)) / skeleton_height(reference.joints, reference.layout) * 100)
 
 
 def main(motion_path: str, reference_path: str, out_dir: str) -> None:
@@ -35,9 +26,9 @@ def main(motion_path: str, reference_path: str, out_dir: str) -> None:
     moved = retargeter.retarget(motion, codes)  # body15, the reference's pixels, as many frames as the motion
     scaled = global_scale_retarget(motion.to_layout("body15"), reference)
 
-    print(f"limb-length error vs the reference: retargeted {limb_error_pct(moved, reference):.1f} %, "
-          f"global scaling {limb_error_pct(scaled, reference):.1f} %, "
-          f"driver as it is {limb_error_pct(motion.to_layout('body15'), reference):.1f} % of height")
+    print(f"proportion error vs the reference: retargeted {proportion_error(moved.joints, reference.joints, 'body15'):.1f} %, "
+          f"global scaling {proportion_error(scaled.joints, reference.joints, 'body15'):.1f} %, "
+          f"driver as it is {proportion_error(motion.to_layout('body15').joints, reference.joints, 'body15'):.1f} % of height")
     write_track(moved, out / "retargeted.npz", overwrite=True)
     write_pose_video(moved, out / "retargeted.mp4", overwrite=True)
     print(f"wrote {out / 'retargeted.npz'} and {out / 'retargeted.mp4'}")

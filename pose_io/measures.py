@@ -249,3 +249,21 @@ def amplitude_ratio(joints: np.ndarray, height: float, like: np.ndarray, like_he
     both = ~np.isnan(mine) & ~np.isnan(theirs)
     total = float(theirs[both].sum())
     return float(mine[both].sum()) / total if total > 0 else float("nan")
+
+
+def proportion_error(
+    joints: np.ndarray, reference: np.ndarray, layout: JointLayout | str = "body15"
+) -> float:
+    """How far a track's body proportions are from a reference's, in % of the reference's height.
+
+    The mean over limbs of ``|median length - the reference's median length|`` (:func:`reference_limb_lengths`),
+    over :func:`skeleton_height` of ``reference`` times 100; 0 means the reference's proportions are kept. One
+    number per track, unlike the per-frame limb error of ``clone.metrics.limb_error``; limbs never seen are left out.
+
+    Args:
+        joints: [T, J, 2] the track measured.
+        reference: [T', J, 2] the reference's joints (any length).
+        layout: the layout of both.
+    """
+    limbs = np.abs(reference_limb_lengths(joints, layout) - reference_limb_lengths(reference, layout))  # [L]
+    return float(np.nanmean(limbs) / skeleton_height(reference, layout) * 100)

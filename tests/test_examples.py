@@ -33,7 +33,7 @@ def test_retarget_openpose(openpose_examples, tmp_path):
 def test_api_script(openpose_examples, tmp_path):
     result = run([sys.executable, str(EXAMPLES / "api.py"), str(openpose_examples / "tall_man"),
                   str(openpose_examples / "small_man"), str(tmp_path / "out")], tmp_path)
-    assert "limb-length error" in result.stdout
+    assert "proportion error" in result.stdout
     assert np.load(tmp_path / "out" / "retargeted.npz")["joints"].shape == (EXAMPLE_FRAMES, 15, 2)
 
 

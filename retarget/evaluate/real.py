@@ -9,7 +9,8 @@ compared with what it should keep:
   (``sigma``), so detection jitter, which no retargeting should copy, does not count as motion.
 * the highest a wrist gets above the neck, in % of height (driver vs output): the measure that shows a
   damped arm raise.
-* limb-length error against B's own limb lengths, in % of B's height (0 = B's proportions kept).
+* proportion error: B's median limb lengths against the output's, in % of B's height (0 = B's proportions kept;
+  :func:`pose_io.measures.proportion_error`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from itertools import permutations
 import numpy as np
 
 from pose_io.clean import smooth_joints
-from pose_io.measures import amplitude_ratio, motion_spread, reference_limb_lengths, skeleton_height
+from pose_io.measures import amplitude_ratio, motion_spread, proportion_error, skeleton_height
 from pose_io.track import PoseTrack
 from retarget.evaluate.config import Method
 from retarget.inference.tracks import filled_body15
@@ -53,22 +54,21 @@ def pair_scores(
     Returns:
         ``amplitude`` (output's range of motion over the driver's), ``amplitude_per_joint`` (the same per
         joint, MidHip left out), ``wrist_rise_pct`` and ``driver_wrist_rise_pct`` (:func:`wrist_rise`),
-        ``limb_error_pct`` (mean absolute limb-length difference from the reference, in % of its height).
+        ``proportion_error_pct`` (:func:`pose_io.measures.proportion_error` against the reference).
     """
     drv = smooth_joints(filled_body15(motion, "motion track"), sigma)
     ref = filled_body15(reference, "reference track")
     out = np.asarray(output.joints, dtype=np.float64)
-    h_drv, h_ref, h_out = (skeleton_height(j, LAYOUT) for j in (drv, ref, out))
+    h_drv, h_out = (skeleton_height(j, LAYOUT) for j in (drv, out))
     # The root's spread is 0 once it is subtracted: leave it out rather than divide 0 by 0.
     moving = [j for j in range(len(LAYOUT.joints)) if j != ROOT_INDEX]
     per_joint = motion_spread(out, h_out, ROOT_INDEX)[moving] / motion_spread(drv, h_drv, ROOT_INDEX)[moving]
-    limbs = np.abs(reference_limb_lengths(out, LAYOUT) - reference_limb_lengths(ref, LAYOUT)) / h_ref * 100
     return {
         "amplitude": amplitude_ratio(out, h_out, drv, h_drv, ROOT_INDEX),
         "amplitude_per_joint": {LAYOUT.joints[j]: round(float(r), 4) for j, r in zip(moving, per_joint)},
         "wrist_rise_pct": wrist_rise(out, h_out),
         "driver_wrist_rise_pct": wrist_rise(drv, h_drv),
-        "limb_error_pct": float(np.nanmean(limbs)),
+        "proportion_error_pct": proportion_error(out, ref, LAYOUT),
     }
 
 
@@ -87,13 +87,13 @@ def real_pair_results(
 def markdown_rows(results: Mapping[str, Mapping[str, Mapping]]) -> list[str]:
     """A markdown table of :func:`real_pair_results`."""
     lines = [
-        "| pair | method | range of motion vs driver | wrist above neck % (driver) | limb error % of B |",
+        "| pair | method | range of motion vs driver | wrist above neck % (driver) | proportion error % of B |",
         "|---|---|---|---|---|",
     ]
     for pair, rows in results.items():
         for name, r in rows.items():
             lines.append(
                 f"| {pair} | {name} | {r['amplitude']:.2f} | {r['wrist_rise_pct']:.1f} "
-                f"({r['driver_wrist_rise_pct']:.1f}) | {r['limb_error_pct']:.1f} |"
+                f"({r['driver_wrist_rise_pct']:.1f}) | {r['proportion_error_pct']:.1f} |"
             )
     return lines

@@ -17,7 +17,7 @@ import torch
 from pose_io import InputError
 from pose_io.clean import smooth_joints
 from pose_io.compare import pose_error
-from pose_io.measures import reference_limb_lengths, skeleton_height
+from pose_io.measures import proportion_error, skeleton_height
 from retarget import api
 from retarget.api import InferenceConfig, ReferenceCodes, load_retargeter
 from retarget.baselines.methods import global_scale_retarget
@@ -39,11 +39,9 @@ def people():
     return tall_and_small(128)
 
 
-def _limb_error(joints: np.ndarray, reference) -> float:
-    """Mean |limb length - the reference's own|, as a share of the reference's height."""
-    ref = filled_body15(reference, "reference")
-    diff = reference_limb_lengths(joints, LAYOUT) - reference_limb_lengths(ref, LAYOUT)
-    return float(np.mean(np.abs(diff)) / skeleton_height(ref, LAYOUT))
+def _proportion_error(joints: np.ndarray, reference) -> float:
+    """How far ``joints`` are from the reference's proportions (% of its height)."""
+    return proportion_error(joints, filled_body15(reference, "reference"), LAYOUT)
 
 
 def _root_relative(joints: np.ndarray) -> np.ndarray:
@@ -104,7 +102,7 @@ def test_the_reference_skeleton_is_kept_better_than_by_global_scaling(retargeter
     motion, reference = people[driver], people[target]
     out = retargeter.retarget(motion, retargeter.reference_codes(reference))
     scaled = global_scale_retarget(motion, reference)
-    assert _limb_error(out.joints, reference) < _limb_error(scaled.joints, reference)
+    assert _proportion_error(out.joints, reference) < _proportion_error(scaled.joints, reference)
     # The output takes the reference's size, not the driver's.
     h_ref = skeleton_height(filled_body15(reference), LAYOUT)
     h_drv = skeleton_height(filled_body15(motion), LAYOUT)

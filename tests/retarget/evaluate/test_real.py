@@ -46,13 +46,13 @@ def test_driver_scaled_to_another_height_keeps_the_whole_motion(walking_track: P
     assert all(r == pytest.approx(1.0, abs=1e-4) for r in scores["amplitude_per_joint"].values())
     assert scores["wrist_rise_pct"] == pytest.approx(scores["driver_wrist_rise_pct"], abs=1e-4)
     # 1.5 times the driver is not the reference's 0.8: every limb is 0.7 / 0.8 of its own length off.
-    assert scores["limb_error_pct"] > 5.0
+    assert scores["proportion_error_pct"] > 5.0
 
 
 def test_the_reference_own_track_has_its_limbs(walking_track: PoseTrack) -> None:
     reference = _smaller(walking_track)
     scores = pair_scores(walking_track, reference, _own_track(walking_track, reference))
-    assert scores["limb_error_pct"] == pytest.approx(0.0, abs=1e-6)
+    assert scores["proportion_error_pct"] == pytest.approx(0.0, abs=1e-6)
     own = filled_body15(reference)  # the output is the reference: its wrists rise as the reference's do
     assert scores["wrist_rise_pct"] == pytest.approx(wrist_rise(own, skeleton_height(own, LAYOUT)), rel=1e-5)
 
@@ -66,7 +66,7 @@ def test_every_ordered_pair_by_every_method(walking_track: PoseTrack) -> None:
         assert list(rows) == list(methods)
         # Two sizes of one person: global scaling gives B's proportions and moves like B's own track.
         edn, own = rows["global scaling (EDN)"], rows["own track"]
-        assert edn["limb_error_pct"] == pytest.approx(0.0, abs=1e-3)
+        assert edn["proportion_error_pct"] == pytest.approx(0.0, abs=1e-3)
         assert edn["amplitude"] == pytest.approx(own["amplitude"], rel=1e-4)
         assert np.isfinite(edn["wrist_rise_pct"]) and np.isfinite(edn["driver_wrist_rise_pct"])
     lines = markdown_rows(results)

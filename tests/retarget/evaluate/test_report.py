@@ -10,7 +10,7 @@ from retarget.evaluate import ALIGNMENTS, METRICS, EvalConfig, markdown_report, 
 def _document() -> dict:
     scores = {align: {m: 0.5 for m in METRICS} | {m + "_se": 0.1 for m in METRICS} for align in ALIGNMENTS}
     real = {"amplitude": 0.9, "amplitude_per_joint": {}, "wrist_rise_pct": 12.0, "driver_wrist_rise_pct": 20.0,
-            "limb_error_pct": 3.0}  # fmt: skip
+            "proportion_error_pct": 3.0}  # fmt: skip
     doc = {
         "config": asdict(EvalConfig(pairs=3)),
         "methods": {

@@ -123,7 +123,7 @@ def test_refinement_keeps_the_real_drivers_range_of_motion(net, shared_dir):
         scores[name] = pair_scores(real["tall_man"], real["small_man"], out)
     assert scores["refined"]["amplitude"] > scores["plain"]["amplitude"] + 0.05
     assert scores["refined"]["amplitude"] > 0.88
-    assert scores["refined"]["limb_error_pct"] < scores["plain"]["limb_error_pct"] + 0.5
+    assert scores["refined"]["proportion_error_pct"] < scores["plain"]["proportion_error_pct"] + 0.5
 
 
 @pytest.mark.parametrize(
