@@ -38,48 +38,28 @@ read. A joint far outside the image and far from its body is an outlier: it is d
 the person is followed and the size inferred, with ONE warning (``logging.warning``) counting the dropped
 joints; ``TrackSummary.outliers`` holds the count.
 
-Multi-person formats are followed with :func:`pose_io.people.follow_person`.
+Multi-person formats are followed with :func:`pose_io.people.follow_person`. How a track is made from the
+detections (fps and size sources, outliers, the person followed) is :mod:`pose_io.summary`; the size
+inference and outlier rules are :mod:`pose_io.frame_bounds`.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import logging
-import math
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from pose_io.errors import InputError
-from pose_io.layouts import get_layout
-from pose_io.limits import (
-    MAX_IMAGE_SIDE,
-    Dropped,
-    check_fps,
-    check_image_size,
-    outlier_mask,
-)
-from pose_io.people import DEFAULT_GATE, Detections, follow_person
+from pose_io.people import DEFAULT_GATE, Detections
 from pose_io.read_arrays import read_csv, read_npy, read_npz
-from pose_io.read_common import (
-    LAYOUT_BY_JOINTS,
-    parse_size,
-)
+from pose_io.read_common import LAYOUT_BY_JOINTS, parse_size
 from pose_io.read_json import load_json, read_openpose, read_results
+from pose_io.summary import TrackSummary, summarize_detections
 from pose_io.track import PoseTrack
 
-log = logging.getLogger(__name__)
-
-DEFAULT_FPS = 30.0
-_SIZE_STEP = 16
-
 __all__ = [
-    "LAYOUT_BY_JOINTS", "READERS", "TrackSummary", "detect_format",
-    "drop_outliers", "infer_image_size", "parse_size", "read_detections", "read_track", "read_track_summary",
-    "summarize_detections", "track_from_detections",
+    "LAYOUT_BY_JOINTS", "READERS", "TrackSummary", "detect_format", "parse_size", "read_detections", "read_track",
+    "read_track_summary", "track_from_detections",
 ]
 
 
@@ -112,31 +92,6 @@ def read_track(
         InputError: missing or malformed input, naming the file and the problem.
     """
     return read_track_summary(path, fmt, person=person, fps=fps, image_size=image_size, gate=gate).track
-
-
-@dataclass(frozen=True, eq=False)
-class TrackSummary:
-    """A track together with how it was read (what ``clone pose info`` shows).
-
-    Attributes:
-        track: the followed person's track.
-        format: the format read.
-        people_counts: [T] int number of people found in each frame.
-        start: first frame with anybody in it (where the person was chosen).
-        lost: frames with people in which the followed person was not found.
-        fps_source: ``"given"``, ``"file"`` or ``"default"``.
-        size_source: ``"given"``, ``"file"``, ``"fallback"`` or ``"inferred"``.
-        outliers: joints dropped as outliers (see :mod:`pose_io.limits`; a warning is logged too).
-    """
-
-    track: PoseTrack
-    format: str
-    people_counts: np.ndarray
-    start: int
-    lost: tuple[int, ...]
-    fps_source: str
-    size_source: str
-    outliers: int = 0
 
 
 def read_track_summary(
@@ -194,46 +149,6 @@ def track_from_detections(
     return summarize_detections(detections, "", person, fps, image_size, gate).track
 
 
-def summarize_detections(
-    detections: Detections,
-    fmt: str,
-    person: int | None = None,
-    fps: float | None = None,
-    image_size: tuple[int, int] | None = None,
-    gate: float = DEFAULT_GATE,
-    fallback_size: tuple[int, int] | None = None,
-) -> TrackSummary:
-    """Follow one person through ``detections``; the track plus how it was made (arguments as above)."""
-    fps_source, size_source = "given", "given"
-    if fps is None:
-        fps_source = "file" if detections.fps is not None else "default"
-        fps = detections.fps if detections.fps is not None else DEFAULT_FPS
-    fps = check_fps(fps, f"{detections.source}: fps" if fps_source == "file" else "fps")
-    if image_size is None:
-        size_source = "file"
-        image_size = detections.image_size
-    if image_size is None and fallback_size is not None:
-        size_source = "fallback"
-        image_size = fallback_size
-    if image_size is not None:
-        image_size = check_image_size(image_size, f"{detections.source}: image size" if size_source == "file"
-                                      else "image size")
-    detections, dropped = drop_outliers(detections, image_size)
-    if dropped.count:
-        log.warning("%s", dropped.message(detections.source))
-    if image_size is None:
-        size_source = "inferred"
-        image_size = infer_image_size(detections)
-        log.info("%s: no image size stored; using %dx%d from the data", detections.source, *image_size)
-    followed = follow_person(detections, person=person, gate=gate)
-    try:
-        track = PoseTrack(followed.joints, followed.confidence, fps, image_size, detections.layout)
-    except InputError as exc:
-        raise InputError(f"{detections.source}: {exc}") from None
-    return TrackSummary(track, fmt, detections.counts, followed.start, followed.lost, fps_source, size_source,
-                        dropped.count)
-
-
 def detect_format(path: Path) -> str:
     """Format name for ``path``: folders are OpenPose, files go by suffix (JSON by content)."""
     if path.is_dir():
@@ -250,60 +165,6 @@ def detect_format(path: Path) -> str:
         raise InputError(f"{path}: not a COCO or AlphaPose keypoint results list")
     raise InputError(f"{path}: unknown pose file type {suffix or '(no suffix)'}; expected a folder of OpenPose "
                      "JSON, .json (COCO/AlphaPose results), .npz, .npy or .csv")
-
-
-def infer_image_size(detections: Detections) -> tuple[int, int]:
-    """(width, height): the smallest multiples of 16 containing every visible coordinate of ``detections``.
-
-    Raises:
-        InputError: the joints reach beyond the largest allowed image (16,384 pixels a side).
-    """
-    maxima = np.zeros(2)
-    for frame in detections.people:
-        if len(frame):
-            xy = frame[..., :2][frame[..., 2] > 0]
-            if len(xy):
-                maxima = np.maximum(maxima, np.nanmax(xy, axis=0))
-    if (maxima + 1 > MAX_IMAGE_SIDE).any():
-        raise InputError(
-            f"{detections.source}: joints reach ({maxima[0]:.6g}, {maxima[1]:.6g}), beyond the largest allowed "
-            f"image ({MAX_IMAGE_SIDE} pixels a side); pass the image size (--size WxH) if the coordinates are pixels"
-        )
-    w, h = (max(_SIZE_STEP, math.ceil((float(v) + 1) / _SIZE_STEP) * _SIZE_STEP) for v in maxima)
-    return w, h
-
-
-def drop_outliers(detections: Detections, image_size: tuple[int, int] | None) -> tuple[Detections, Dropped]:
-    """``detections`` with outlier joints made missing (rules in :mod:`pose_io.limits`), and what was dropped.
-
-    Args:
-        detections: everybody in a source.
-        image_size: (width, height), or None when it is unknown (to be inferred after this).
-
-    Returns:
-        The detections (the same object when nothing was dropped) and a :class:`pose_io.limits.Dropped`.
-    """
-    counts = detections.counts  # [T]
-    if not counts.any():
-        return detections, Dropped(0)
-    allpeople = np.concatenate([p for p in detections.people if len(p)])  # [N, J, 3]
-    xy = np.where((allpeople[..., 2] > 0)[..., None], allpeople[..., :2], np.nan)
-    outliers = outlier_mask(xy, image_size)  # [N, J]
-    if not outliers.any():
-        return detections, Dropped(0)
-    n, j = (int(v) for v in np.argwhere(outliers)[0])
-    frame_of = np.repeat(np.arange(len(counts)), counts)  # [N]
-    names = get_layout(detections.layout).joints
-    dropped = Dropped(int(outliers.sum()), int(frame_of[n]), names[j], float(xy[n, j, 0]), float(xy[n, j, 1]))
-    allpeople = allpeople.copy()
-    allpeople[outliers] = (np.nan, np.nan, 0.0)
-    keep = (allpeople[..., 2] > 0).any(axis=1)  # [N] a detection left without any joint goes
-    splits = np.cumsum(counts)[:-1]
-    people = tuple(p[k] for p, k in zip(np.split(allpeople, splits), np.split(keep, splits)))
-    ids = None
-    if detections.ids is not None:
-        ids = tuple(i[k] for i, k in zip(detections.ids, np.split(keep, splits)))
-    return dataclasses.replace(detections, people=people, ids=ids), dropped
 
 
 READERS: dict[str, Callable[[Path], Detections]] = {

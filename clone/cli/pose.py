@@ -18,7 +18,7 @@ from clone.cli.progress import progress_bar
 from pose_io.limits import MAX_FPS  # one limit for the library and the options
 
 if TYPE_CHECKING:
-    from pose_io.readers import TrackSummary
+    from pose_io.summary import TrackSummary
 
 pose_app = typer.Typer(
     help="Inspect, draw, convert and extract 2D pose tracks (OpenPose JSON, COCO/AlphaPose JSON, npz, npy, csv).",

@@ -7,7 +7,8 @@ from hypothesis import event, given
 from hypothesis import strategies as st
 
 from pose_io import BODY25, COCO17, COCO18, InputError, read_detections, read_track, read_track_summary
-from pose_io.readers import detect_format, infer_image_size, parse_size
+from pose_io.frame_bounds import infer_image_size
+from pose_io.readers import detect_format, parse_size
 from tests.pose_io.fuzzing import fast_and_slow
 from tests.pose_io.test_fuzz_tables import assert_sane
 
