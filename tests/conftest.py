@@ -41,3 +41,15 @@ def walking_track() -> PoseTrack:
     joints += rng.normal(0, 0.5, joints.shape).astype(np.float32)
     conf = np.full(joints.shape[:2], 0.9, dtype=np.float32)
     return PoseTrack(joints, conf, 30.0, (640, 480), "body25")
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config) -> None:
+    """Say how many tests skipped because ../shared (mocap, the authors' arrays, OpenPose and real examples) is absent."""
+    skipped = terminalreporter.stats.get("skipped", [])
+    reasons = [str(r.longrepr[2]) if isinstance(r.longrepr, tuple) else str(r.longrepr) for r in skipped]
+    shared = [r for r in reasons if "../shared" in r or "CLONE2D_NO_SHARED" in r]
+    if shared:
+        terminalreporter.write_line(
+            f"{len(shared)} tests skipped: they read real data from ../shared ({shared[0].split(': ')[-1]}); "
+            "the rest of the suite ran without it"
+        )
