@@ -97,7 +97,7 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
 def int8_ssim(model: Any, driver_path: str, method: str, frames: int = 60) -> float:
     """Mean SSIM of the int8 generator's frames against the fp32 ONNX session's over the first driven frames
     (each runtime on its own previous frames, as when driving)."""
-    from clone.drive.run import drive_poses, read_driver
+    from clone.drive.poses import drive_poses, read_driver
     from clone.metrics.frames import frame_pair_scores
     from clone.runtime.generate import generate_frames
 

@@ -51,7 +51,7 @@ def cartoon_command(
     import time
 
     from clone.cartoon import cartoon_frames, load_character, make_cartoon, summary_lines
-    from clone.drive.run import load_driving_retargeter
+    from clone.drive.poses import load_driving_retargeter
     from pose_io.atomic import atomic_file
     from pose_io.errors import InputError
     from pose_io.outputs import FOLDER, check_number, check_output

@@ -6,10 +6,10 @@ becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at 
 the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. Every driver is moved
 onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
 with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track kept
-on the reference's stage (:func:`clone.drive.run.finish_driven`). The scores are the demo's primary measure, the RMSE of
+on the reference's stage (:func:`clone.drive.poses.finish_driven`). The scores are the demo's primary measure, the RMSE of
 the MidHip-aligned joints in % of the ground truth's height, and its placement, the MidHip's RMS distance from the
 truth's (:func:`clone.metrics.track_gt_scores`). Everybody
-Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.run.global_scale_to`, then the
+Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.poses.global_scale_to`, then the
 stage).
 
 Why it exists: the world's eval cases (`clone retarget eval`: 64-frame windows, any view and pitch, a 64-frame
@@ -47,7 +47,7 @@ class CloningCase:
     Attributes:
         clip: the clip's path in the mocap folder (as the split lists it).
         kind: the demo pair it copies (``proportions``, ``view``, ``both``).
-        driver: the driver's track as `clone drive` reads it (:func:`clone.drive.run.driver_track`).
+        driver: the driver's track as `clone drive` reads it (:func:`clone.drive.poses.driver_track`).
         truth: the reference character performing the same frames, seen by the reference's camera (body15).
     """
 
@@ -75,7 +75,7 @@ def cloning_cases(
         InputError: no clip long enough whose ground truth stays inside the frame.
     """
     from clone.demo.scenes import stays_in_frame
-    from clone.drive.run import driver_track
+    from clone.drive.poses import driver_track
     from clone.synth import get_character
     from clone.synth.performance import render_performance
     from retarget.world import load_motion
@@ -107,7 +107,7 @@ def cloning_cases(
 
 def network_drive(weights: str | Path | None, reference: PoseTrack, device: str = "cpu") -> Drive:
     """`clone drive --method retarget` onto ``reference`` with ``weights`` (None: the shipped ones)."""
-    from clone.drive.run import finish_driven
+    from clone.drive.poses import finish_driven
     from retarget.api import load_retargeter
 
     net = load_retargeter(weights, device=device)
@@ -117,7 +117,7 @@ def network_drive(weights: str | Path | None, reference: PoseTrack, device: str 
 
 def global_scale_drive(reference: PoseTrack) -> Drive:
     """`clone drive --method global-scale` onto ``reference`` (Everybody Dance Now's global scaling)."""
-    from clone.drive.run import finish_driven, global_scale_to
+    from clone.drive.poses import finish_driven, global_scale_to
     from retarget.baselines.global_scale import scale_stats
 
     target = scale_stats(reference.joints, reference.joint_layout)

@@ -1,22 +1,15 @@
-"""Driving a trained reference model with someone else's poses (`clone drive`).
+"""Driving a trained reference model with someone else's poses (`clone drive`): the video.
 
-1. Read the driver's track (any format ``pose_io`` reads), as body15, with short gaps filled.
-2. Move it onto the reference (``--method``):
-   - ``retarget``: the retargeting network, with the reference's skeleton and view codes stored in the model
-     (recomputed from the stored reference track when other weights are given);
-   - ``global-scale``: Everybody Dance Now's per-frame scale and translation between feet positions;
-   - ``none``: the driver's pixel coordinates as they are, read as the reference's;
-   then, for the first two, kept on the part of the frame the reference stood on (``--stage``, :mod:`clone.drive.stage`).
-3. Draw each frame's pose map on the reference's canvas and run the generator frame after frame, each frame
+1. The driver's poses moved onto the reference (:mod:`clone.drive.poses`).
+2. Each frame's pose map drawn on the reference's canvas and the generator run frame after frame, each frame
    conditioned on the one it generated before (the first on zeros, as in training).
-4. Write an H.264 mp4 at the driver's fps, one frame at a time: memory does not grow with the track.
+3. An H.264 mp4 written at the driver's fps, one frame at a time: memory does not grow with the track.
 
 Drawing, the generator and the encoder run side by side in threads (:mod:`clone.runtime.pipeline`).
 """
 
 from __future__ import annotations
 
-import logging
 import os
 import time
 from collections.abc import Callable
@@ -28,22 +21,15 @@ import numpy as np
 import torch
 
 from clone.choices import Method, StageMode
-from clone.drive.stage import StageFit, fit_to_stage
+from clone.drive.poses import METHODS, STAGES, drive_poses, read_driver
 from clone.model.canvas import full_frame_canvas
-from clone.model.reference import LAYOUT, ReferenceModel, file_sha256, load_reference_model
+from clone.model.reference import load_reference_model
 from clone.runtime.generate import generate_frames, side_by_side_frame
 from clone.runtime.pipeline import BackgroundSink
 from pose_io.atomic import check_new_output
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
-from retarget.baselines.global_scale import ScaleStats, apply_global_scale, scale_stats
 
-log = logging.getLogger(__name__)
-
-
-
-METHODS = tuple(m.value for m in Method)
-STAGES = tuple(s.value for s in StageMode)
 DEFAULT_MODEL = "ref_model.pt"
 
 
@@ -59,169 +45,6 @@ class DriveResult:
     poses_out: Path | None
     seconds: float
     stage_share: float = 0.0  # share of frames that were off the reference's stage and moved onto it
-
-
-def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
-    """The driver's track as body15, gaps of at most ``max_gap`` frames filled linearly."""
-    from pose_io.readers import read_track
-
-    return driver_track(read_track(path), max_gap, str(path))
-
-
-def driver_track(track: PoseTrack, max_gap: int = 5, name: str = "driver") -> PoseTrack:
-    """A driver's track as `clone drive` uses it: body15, gaps of at most ``max_gap`` frames filled linearly."""
-    from pose_io.clean import fill_gaps
-
-    track = track.to_layout(LAYOUT)
-    if not (~track.missing).any():
-        raise InputError(f"{name}: no visible joints in any frame")
-    if max_gap > 0:
-        track, _ = fill_gaps(track, max_gap)
-    return track
-
-
-# ------------------------------------------------------------------------------------------------ methods
-
-
-def retargeting_weights(model: ReferenceModel, weights: str | os.PathLike | None) -> Path:
-    """The weights file to retarget with: ``weights``; else the file the model's codes came from, when it is
-    still there unchanged (a model trained with ``--weights X`` keeps using X); else the shipped weights."""
-    from retarget.api import PACKAGED_WEIGHTS
-
-    if weights is not None:
-        return Path(weights)
-    hint = Path(model.codes_weights_path) if model.codes_weights_path else None
-    if hint is not None and hint.is_file() and file_sha256(hint) == model.codes_weights:
-        log.info("retargeting with %s, the weights the model's codes came from", hint)
-        return hint
-    if PACKAGED_WEIGHTS.is_file():
-        return PACKAGED_WEIGHTS
-    if model.reference_codes is None:
-        raise InputError("this reference model holds no retargeting codes (it was trained without retargeting "
-                         "weights) and none are shipped; pass --weights FILE or use --method global-scale")
-    raise InputError(f"the retargeting weights this model's codes came from ({model.codes_weights_path}) are "
-                     "gone and none are shipped; pass --weights FILE or use --method global-scale")
-
-
-def load_driving_retargeter(
-    weights: str | os.PathLike | None, device: str = "cpu", refine_steps: int | None = None
-):  # -> retarget.api.Retargeter | NumpyRetargeter
-    """The retargeting network for driving: ``refine_steps`` motion-code refinement steps (None: inference's
-    default); with 0, the numpy backend when the weights have an up-to-date export (nothing to refine there)."""
-    from retarget.api import load_retargeter
-    from retarget.inference.config import InferenceConfig
-
-    config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
-    return load_retargeter(weights, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")
-
-
-def retarget_onto(
-    driver: PoseTrack, model: ReferenceModel, weights: str | os.PathLike | None, device: str = "cpu",
-    refine_steps: int | None = None,
-) -> PoseTrack:
-    """The driver's motion performed by the reference, in the reference's pixels (retargeting network).
-
-    Uses the codes stored in the model when the same weights made them; otherwise computes them from the
-    reference track stored in the model. ``refine_steps``: motion-code refinement steps (None: inference's
-    default; 0: the encoder's codes as they are, on the numpy backend when the weights have an export).
-    """
-    from retarget.api import ReferenceCodes
-
-    path = retargeting_weights(model, weights)
-    retargeter = load_driving_retargeter(path, device, refine_steps)
-    if model.reference_codes is not None and file_sha256(path) == model.codes_weights:
-        codes = ReferenceCodes.from_dict(model.reference_codes)
-    else:
-        log.info("computing the reference's codes from its stored track with %s", path)
-        codes = retargeter.reference_codes(model.reference_track)
-    return retargeter.retarget(driver, codes)
-
-
-def global_scale_onto(driver: PoseTrack, model: ReferenceModel) -> PoseTrack:
-    """The driver moved and scaled per frame onto the reference's feet positions (Everybody Dance Now)."""
-    if model.scale_stats is None:
-        raise InputError("the reference never shows its ankles, so --method global-scale is not available; "
-                         "use --method retarget or none")
-    return global_scale_to(driver, model.scale_stats, model.canvas.image_size)
-
-
-def global_scale_to(driver: PoseTrack, target: ScaleStats, image_size: tuple[int, int]) -> PoseTrack:
-    """The driver moved and scaled per frame onto a reference's scale statistics, in its ``image_size``."""
-    layout = driver.joint_layout
-    joints = apply_global_scale(driver.joints, layout, scale_stats(driver.joints, layout), target)
-    return driver.replace(joints=joints, image_size=image_size)
-
-
-def drive_poses(
-    driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
-    refine_steps: int | None = None,
-) -> tuple[PoseTrack, StageFit | None]:
-    """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
-
-    Args:
-        driver: the driver's track.
-        model: the reference model.
-        method: one of :data:`METHODS`.
-        weights: retargeting weights (see :func:`retargeting_weights`).
-        device: where the retargeting network runs.
-        stage: one of :data:`STAGES`: ``reference`` keeps the ``retarget`` and ``global-scale`` results on the
-            part of the frame the reference occupied (:func:`clone.drive.stage.fit_to_stage`); ``raw`` does not.
-        foot_lock: clean up the ``retarget`` result's foot skating with the driver's foot contacts
-            (:func:`pose_io.feet.lock_feet`), before the stage fit, which moves the whole track at once.
-        refine_steps: motion-code refinement steps of ``retarget`` (see :func:`retarget_onto`).
-
-    Returns:
-        ``(track, fit)``; ``fit`` is None when the stage was not applied (``raw``, or ``--method none``).
-    """
-    try:
-        method, stage = Method(method), StageMode(stage)
-    except ValueError:
-        if method not in METHODS:
-            raise InputError(f"unknown --method {method!r}; valid: {', '.join(METHODS)}") from None
-        raise InputError(f"unknown --stage {stage!r}; valid: {', '.join(STAGES)}") from None
-    if method is Method.NONE:
-        if driver.image_size != model.canvas.image_size:
-            log.warning("driver frames are %dx%d, the reference's %dx%d; --method none uses the coordinates "
-                        "as they are", *driver.image_size, *model.canvas.image_size)
-        return driver.replace(image_size=model.canvas.image_size), None
-    if method is Method.RETARGET:
-        driven = retarget_onto(driver, model, weights, device, refine_steps)
-    else:
-        driven = global_scale_onto(driver, model)
-    return finish_driven(driven, driver, model.reference_track, method is Method.RETARGET, stage, foot_lock)
-
-
-def finish_driven(
-    driven: PoseTrack, driver: PoseTrack, reference: PoseTrack, retargeted: bool,
-    stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
-) -> tuple[PoseTrack, StageFit | None]:  # fmt: skip
-    """What follows moving the driver onto the reference: a retargeted track's foot skating cleaned with the
-    driver's contacts (``foot_lock``), then the whole track kept on the reference's stage (``stage``).
-
-    Returns:
-        ``(track, fit)`` as :func:`drive_poses`.
-    """
-    if retargeted and foot_lock:
-        from pose_io.feet import lock_feet
-
-        driven = lock_feet(driven, driver)
-    if StageMode(stage) is StageMode.RAW:
-        return driven, None
-    return fit_to_stage(driven, reference)
-
-
-def move_onto_reference(
-    driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
-    refine_steps: int | None = None,
-) -> PoseTrack:
-    """The driver's poses in the reference's pixels (see :func:`drive_poses`, which also says how far they
-    were moved to stay on the reference's stage)."""
-    return drive_poses(driver, model, method, weights, device, stage, foot_lock, refine_steps)[0]
-
-
-# ------------------------------------------------------------------------------------------------ command
 
 
 def check_poses_out(track: PoseTrack, path: Path, overwrite: bool) -> None:

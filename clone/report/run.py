@@ -117,7 +117,7 @@ def _write_video(
         path: the mp4 to write.
         model: the reference model.
         driver: the driver's poses.
-        driven: method -> the driver's poses moved onto the reference (``clone.drive.run.drive_poses``).
+        driven: method -> the driver's poses moved onto the reference (``clone.drive.poses.drive_poses``).
         truth_frames: the true frames cut to the canvas (``cut_gt_frames``), or None.
         kept: receives the frame scores and stills.
         device: where the generator runs.
@@ -238,16 +238,16 @@ def make_report(
         gt_frames: frames (video or image folder) of the same, the reference's frame size.
         overwrite: replace an existing report folder.
         device: where the networks run.
-        weights: retargeting weights (default: see ``clone.drive.run.retargeting_weights``).
+        weights: retargeting weights (default: see ``clone.drive.poses.retargeting_weights``).
         max_gap: fill driver gaps of at most this many frames.
         progress: called with (frames done, total) after every frame.
-        stage: ``reference`` or ``raw`` (see ``clone.drive.run.drive_poses``).
+        stage: ``reference`` or ``raw`` (see ``clone.drive.poses.drive_poses``).
         refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
 
     Returns:
         Where the page is and the summary numbers.
     """
-    from clone.drive.run import drive_poses, read_driver  # torch loads only when a report is made
+    from clone.drive.poses import drive_poses, read_driver  # torch loads only when a report is made
     from clone.model.reference import load_reference_model
 
     t0 = time.perf_counter()

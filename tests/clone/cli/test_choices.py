@@ -125,7 +125,7 @@ def test_shell_completion_is_on_and_completes_the_choices():
 # The command line keeps copies of the library's enums whose modules import torch or OpenCV; they must agree.
 def test_the_library_registries_match_the_enums():
     """The enums are built from light modules; the registries that interpret them must hold the same names."""
-    from clone.drive import run as drive
+    from clone.drive import poses as drive
     from clone.model import canvas
     from retarget.network import model
     from retarget.training import losses

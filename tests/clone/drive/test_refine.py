@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+import clone.drive.poses
 import clone.drive.run
 import retarget.api
 from clone.cli.main import app
-from clone.drive.run import DriveResult, move_onto_reference
+from clone.drive.poses import move_onto_reference
+from clone.drive.run import DriveResult
 from clone.model.reference import load_reference_model
 from pose_io.errors import InputError
 from pose_io.readers import read_track
@@ -62,7 +64,7 @@ def test_drive_and_report_pass_the_steps(flag, expected, driver, model_path, tmp
         raise InputError("stopped here")
 
     monkeypatch.setattr(clone.drive.run, "drive", fake_drive)
-    monkeypatch.setattr(clone.drive.run, "drive_poses", fake_drive_poses)
+    monkeypatch.setattr(clone.drive.poses, "drive_poses", fake_drive_poses)
     result = CliRunner().invoke(app, ["drive", str(driver), "--out", str(tmp_path / "o.mp4"), "--threads", "1",
                                       "--device", "cpu", *flag])
     assert result.exit_code == 0, result.output

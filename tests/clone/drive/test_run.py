@@ -13,7 +13,8 @@ import torch
 from typer.testing import CliRunner
 
 from clone.cli.main import app
-from clone.drive.run import drive, drive_poses, move_onto_reference
+from clone.drive.poses import drive_poses, move_onto_reference
+from clone.drive.run import drive
 from clone.drive.stage import reference_stage
 from clone.model.reference import file_sha256, load_reference_model
 from clone.runtime.generate import generate_frames
