@@ -122,6 +122,10 @@ def train(
                             "within 45 degrees of the front, the views of most videos (0: every sample draws "
                             "from all 13 view bins, like the world).")
     ] = 0.0,
+    turn_share: Annotated[
+        float, typer.Option("--turn-share", help="Share of training motions given a whole-body turn of 90-360 "
+                            "degrees about the vertical, in 3D before projection (0: the captured motion only).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -172,6 +176,7 @@ def train(
     check_number("--max-pitch", max_pitch, 0, 60)
     check_number("--perspective", perspective, 0, 1)
     check_number("--frontal-share", frontal_share, 0, 1)
+    check_number("--turn-share", turn_share, 0, 1)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -185,7 +190,7 @@ def train(
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,
                              cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective),
-                             frontal_share=frontal_share)
+                             frontal_share=frontal_share, turn_share=turn_share)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

@@ -52,6 +52,9 @@ class TrainConfig:
         frontal_share: share of training samples whose two views are both drawn from the bins within
             ``retarget.world.camera.FRONTAL_YAW`` (45°) of the front, the views of most videos; validation keeps
             every view.
+        turn_share: share of training motions given a whole-body turn about the vertical in 3D before
+            projection (:mod:`retarget.world.turns`); validation keeps the captured motion.
+        turn_range: angles of those turns, degrees, either way.
     """
 
     variant: str = "full"
@@ -74,6 +77,8 @@ class TrainConfig:
     extra_characters: int = 0
     extra_spread: float = 1.0
     frontal_share: float = 0.0
+    turn_share: float = 0.0
+    turn_range: tuple[float, float] = (90.0, 360.0)
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -83,6 +88,10 @@ class TrainConfig:
             raise ValueError("batch_size must be positive")
         if not 0 <= self.frontal_share <= 1:
             raise ValueError("frontal_share must be a share in [0, 1]")
+        if not 0 <= self.turn_share <= 1:
+            raise ValueError("turn_share must be a share in [0, 1]")
+        if not 0 <= self.turn_range[0] <= self.turn_range[1]:
+            raise ValueError("turn_range must be 0 <= low <= high degrees")
 
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict (lists for tuples)."""
@@ -99,7 +108,7 @@ class TrainConfig:
         nested = {
             "augment": AugmentConfig, "loss": LossConfig, "preprocess": PreprocessConfig, "cameras": CameraSpread,
         }
-        values = dict(data)
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
         for key, kind in nested.items():
             if key in values:
                 values[key] = kind(**{k: tuple(v) if isinstance(v, list) else v for k, v in values[key].items()})

@@ -20,6 +20,7 @@ from retarget.network.preprocess import LAYOUT, LOCAL_INDEX, NormStats, Preproce
 from retarget.training.augment import COMBOS
 from retarget.training.config import TrainConfig
 from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
+from retarget.world.turns import apply_turn, draw_turn
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,12 @@ class WorldSplit(Protocol):
         self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
         rng: np.random.Generator | None = None, *, cameras: CameraSpread = WORLD_CAMERAS,
     ) -> np.ndarray: ...
+
+    # Read only when samples turn (``CrossSamples(turns=...)``).
+    def window3d(self, motion: int, character: int, length: int | None = None, offset: int = 0) -> np.ndarray: ...
+
+    def project(self, pos: np.ndarray, views: Sequence[int] | np.ndarray, rng: np.random.Generator | None = None,
+                pitch_deg: Sequence[float] | None = None, cameras: CameraSpread = WORLD_CAMERAS) -> np.ndarray: ...
 
 
 class CrossSamples(Dataset):
@@ -59,11 +66,15 @@ class CrossSamples(Dataset):
         height: the skeleton height (canvas pixels) ``scales`` bring characters to.
         frontal: share of samples whose views are both drawn from the bins within :data:`FRONTAL_YAW` of the
             front (the split's ``views`` give the bins' yaws); the others draw from every bin.
+        turns: share of motions given a whole-body turn in 3D before projection
+            (:func:`retarget.world.turns.draw_turn`); every window of a turned motion turns alike.
+        turn_range: the turns' angles, degrees (either way).
     """
 
     def __init__(
         self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None,
         cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None, frontal: float = 0.0,
+        turns: float = 0.0, turn_range: tuple[float, float] = (90.0, 360.0),
     ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
@@ -86,6 +97,10 @@ class CrossSamples(Dataset):
         if not 0 <= frontal <= 1:
             raise ValueError("frontal must be a share in [0, 1]")
         self.frontal = frontal
+        if not 0 <= turns <= 1:
+            raise ValueError("turns must be a share in [0, 1]")
+        self.turns = turns
+        self.turn_range = tuple(turn_range)
         self.frontal_views = np.arange(split.num_views)
         if frontal > 0:
             self.frontal_views = np.flatnonzero(np.abs(np.asarray(split.views)) <= FRONTAL_YAW)
@@ -112,13 +127,21 @@ class CrossSamples(Dataset):
         view_seeds = rng.integers(0, 2**63 - 1, size=2)
         if views[0] == views[1]:
             view_seeds[1] = view_seeds[0]
+        # Turns draw from their own generator: without them the samples are those of runs before they existed.
+        turning = np.random.default_rng([self.seed, epoch, index, 15485863]) if self.turns > 0 else None
+        turns = [draw_turn(turning, self.length, self.turn_range) if turning is not None
+                 and turning.random() < self.turns else None for _ in range(2)]  # fmt: skip
         cache: dict[tuple[int, int, int], np.ndarray] = {}
         windows = []
         for m, c, v in COMBOS:
             key = (int(motions[m]), int(chars[c]), int(views[v]))
             if key not in cache:
                 camera = np.random.default_rng(int(view_seeds[v]))
-                window = self.split.window(*key, length=self.length, offset=0, rng=camera, **self._camera_kwargs)
+                if turns[m] is None:
+                    window = self.split.window(*key, length=self.length, offset=0, rng=camera, **self._camera_kwargs)
+                else:
+                    pos = apply_turn(self.split.window3d(key[0], key[1], self.length), turns[m])
+                    window = self.split.project(pos[None], [key[2]], camera, cameras=self.cameras)[0]
                 if self.own_height:
                     window = window * (self.height / skeleton_heights(window[None], LAYOUT)[0])
                 elif self.scales is not None:

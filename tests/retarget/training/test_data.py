@@ -97,3 +97,44 @@ def test_a_camera_spread_reaches_the_split_and_windows_keep_the_height():
     assert np.ptp(skeleton_heights(plain)) > 0.01  # per character, not per window
     with pytest.raises(ValueError, match="target height"):
         CrossSamples(split, 64, "full", 4, seed=0, scales=scales, cameras=spread)
+
+
+@pytest.fixture(scope="module")
+def tiny_split(tmp_path_factory):
+    from retarget.world import MotionWorld
+    from tests.retarget.world.test_dataset import SMALL, TINY_FILES, write_clip
+
+    root = tmp_path_factory.mktemp("mocap")
+    for rel in TINY_FILES:
+        dest = root / "bandai" / rel.rsplit("/", 1)[-1]
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        write_clip(dest)
+    return MotionWorld.build(root, tmp_path_factory.mktemp("cache"), **SMALL).split("train")
+
+
+def test_turning_samples_keep_their_draws_and_turn_every_window_of_a_motion_alike(tiny_split):
+    from retarget.world.turns import facing_change
+
+    plain = CrossSamples(tiny_split, 64, "full", 20, seed=3)
+    turned = CrossSamples(tiny_split, 64, "full", 20, seed=3, turns=1.0)
+    none = CrossSamples(tiny_split, 64, "full", 20, seed=3, turns=0.0)
+    for i in range(3):
+        a, b, c = plain.sample(1, i), turned.sample(1, i), none.sample(1, i)
+        np.testing.assert_array_equal(a["ids"], b["ids"])  # the same motions, characters and views
+        np.testing.assert_array_equal(a["windows"], c["windows"])  # a share of 0 draws nothing new
+        assert not np.allclose(a["windows"], b["windows"])
+        np.testing.assert_array_equal(b["windows"], turned.sample(1, i)["windows"])  # deterministic
+    sample = turned.sample(0, 0)
+    w = sample["windows"]  # [8, T, 15, 2]
+    # Windows of one motion on two characters seen from one view turn alike: the shoulder axis keeps the
+    # same on-screen direction sign frame by frame.
+    from retarget.network.preprocess import LAYOUT
+
+    r, left = LAYOUT.index("r_shoulder"), LAYOUT.index("l_shoulder")
+    sign = np.sign(w[:, :, left, 0] - w[:, :, r, 0])  # [8, T]
+    assert (sign[combo_index(0, 0, 0)] == sign[combo_index(0, 1, 0)]).mean() > 0.9
+    assert facing_change(np.zeros((1, 2, 18, 3))).shape == (1,)
+    with pytest.raises(ValueError, match="share"):
+        CrossSamples(tiny_split, 64, "full", 4, seed=0, turns=1.5)
+    config = TrainConfig(turn_share=0.3, turn_range=(90.0, 180.0))
+    assert TrainConfig.from_dict(config.to_dict()) == config
