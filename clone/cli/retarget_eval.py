@@ -70,6 +70,10 @@ def evaluate(
         float, typer.Option("--noise", help="Detector noise on the inputs: Gaussian, std as a fraction of the "
                             "person's height (real OpenPose tracks: about 0.002-0.006).")
     ] = 0.0,
+    turns: Annotated[
+        bool, typer.Option("--turns/--no-turns", help="Also score turn cases: the split's windows each turned by "
+                           "90-360 degrees about the vertical, and its windows that turn by over 90 as captured.")
+    ] = True,
     split: Annotated[Split, typer.Option("--split", parser=Split, help="World split to measure on.")] = Split.TEST,
     code_grids: Annotated[
         int, typer.Option("--code-grids", min=1, help="Silhouette grids (6 motions x 6 characters x 6 views each, "
@@ -126,7 +130,7 @@ def evaluate(
             world.split(split.value), out, weights=weights, compare=named, official=official, bvh=bvh or (), real=real_tracks,
             config=EvalConfig(pairs=pairs, length=length, reference_length=reference_length, seed=seed, max_yaw=max_yaw,
                               max_pitch=max_pitch, noise=noise, code_grids=code_grids,
-                              probe_steps=probe_steps),
+                              probe_steps=probe_steps, turns=turns),
             fps=world.config.fps, device=device,
             overwrite=overwrite, world_seed=world_seed, refine_steps=refine_steps,
             probe_split=world.split("train") if probe_steps else None,

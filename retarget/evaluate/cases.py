@@ -11,6 +11,7 @@ from pose_io.errors import InputError
 from retarget.evaluate.config import DEFAULT_CONFIG, EvalConfig, Method, Progress
 from retarget.evaluate.references3d import REFERENCE_FUNCTIONS
 from retarget.evaluate.scores import CaseScores, case_scores, summarise
+from retarget.evaluate.turns import MotionSource
 from retarget.inference.tracks import body15_track
 from retarget.inference.windows import strided_starts
 from retarget.world.skeleton import Motion3D, Skeleton, joint_index, retarget_3d
@@ -80,7 +81,7 @@ def _overlaps(a: WindowLabel, a_len: int, b: WindowLabel, b_len: int) -> bool:
 
 
 def _reference_candidates(
-    motions: WorldSplit | ClipMotions, split: WorldSplit, config: EvalConfig
+    motions: MotionSource, split: WorldSplit, config: EvalConfig
 ) -> dict[int, list[int]]:
     """Evaluated window -> the reference windows of ``split`` it may take, for every window long enough."""
     labels, refs_all = motions.window_labels, split.window_labels
@@ -98,7 +99,7 @@ def _reference_candidates(
 
 
 def sample_cases(
-    motions: WorldSplit | ClipMotions, split: WorldSplit, config: EvalConfig, rng: np.random.Generator
+    motions: MotionSource, split: WorldSplit, config: EvalConfig, rng: np.random.Generator
 ) -> list[Case]:
     """``config.pairs`` cases of ``motions`` with references from ``split`` (see the package docstring).
 
@@ -129,7 +130,7 @@ def sample_cases(
 
 
 def _score_case(
-    case: Case, split: WorldSplit, source: WorldSplit | ClipMotions, methods: Mapping[str, Method],
+    case: Case, split: WorldSplit, source: MotionSource, methods: Mapping[str, Method],
     config: EvalConfig, fps: float, noise: np.random.Generator | None = None,
 ) -> dict[str, CaseScores]:  # fmt: skip
     """Row -> :func:`case_scores` of one case, for every method and then every 3D reference.
@@ -165,7 +166,7 @@ def evaluate(
     split: WorldSplit,
     methods: Mapping[str, Method],
     config: EvalConfig = DEFAULT_CONFIG,
-    motions: ClipMotions | None = None,
+    motions: MotionSource | None = None,
     fps: float = 30.0,
     progress: Progress | None = None,
 ) -> dict[str, dict[str, dict[str, float]]]:

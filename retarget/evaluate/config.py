@@ -34,6 +34,9 @@ class EvalConfig:
         noise: detector noise: every joint of the driver and reference tracks the methods see is moved by
             Gaussian noise of this std, as a fraction of that person's height (0 = clean; real OpenPose tracks
             measure about 0.002-0.006). The truth stays clean.
+        turns: also score the turn cases (:mod:`retarget.evaluate.turns`): ``pairs`` cases of the split's windows
+            each turned by 90-360 degrees, and ``pairs`` cases of its windows that turn by more than 90 degrees
+            as captured (when it has any).
     """
 
     pairs: int = 500
@@ -46,6 +49,7 @@ class EvalConfig:
     code_grids: int = 10
     probe_steps: int = 0
     noise: float = 0.0
+    turns: bool = True
 
     def __post_init__(self) -> None:
         if self.pairs < 1 or self.length < 8 or self.reference_length < 8:

@@ -22,6 +22,7 @@ from retarget.evaluate.config import DEFAULT_CONFIG, PROBE_ROW, EvalConfig, Meth
 from retarget.evaluate.real import real_pair_results
 from retarget.evaluate.references3d import REFERENCES_3D
 from retarget.evaluate.report import markdown_report, report_notes
+from retarget.evaluate.turns import MotionSource
 from retarget.world.split import WorldSplit
 
 log = logging.getLogger(__name__)
@@ -140,11 +141,21 @@ def _gather_rows(
 
 def _case_sources(
     split: WorldSplit, bvh: Sequence[str | Path], config: EvalConfig, fps: float
-) -> dict[str, ClipMotions | None]:
-    """Table title -> source of motions: the split's own windows (None), then the extra mocap clips if any."""
+) -> dict[str, MotionSource | None]:
+    """Table title -> source of motions: the split's own windows (None), its turn cases (``config.turns``), then
+    the extra mocap clips if any."""
+    from retarget.evaluate.turns import TURN_DEGREES, TURN_RANGE, CapturedTurns, TurnedMotions
     from retarget.world.rigs import load_motion
 
-    sources: dict[str, ClipMotions | None] = {f"{split.name} split": None}
+    sources: dict[str, MotionSource | None] = {f"{split.name} split": None}
+    if config.turns:
+        lo, hi = TURN_RANGE
+        sources[f"{split.name} split, turned {lo:g}-{hi:g}°"] = TurnedMotions(split, config.seed)
+        captured = CapturedTurns(split, config.length)
+        if captured.num_motions:
+            sources[f"{split.name} split, captured turns over {TURN_DEGREES:g}° ({captured.num_motions} windows)"] = (
+                captured
+            )
     if bvh:
         clips = [load_motion(path, fps=fps) for path in bvh]
         sources[f"extra mocap ({len(clips)} clip{'s' if len(clips) > 1 else ''})"] = ClipMotions(
