@@ -101,7 +101,7 @@ def int8_ssim(model: Any, driver_path: str, method: str, frames: int = 60) -> fl
     from clone.metrics.frames import frame_pair_scores
     from clone.runtime.generate import generate_frames
 
-    driven, _ = drive_poses(read_driver(driver_path), model, method)
+    driven, _ = drive_poses(read_driver(driver_path, layout=model.pose_layout), model, method)
     track = driven.frames(0, min(frames, driven.num_frames))
     int8 = [frame for _, frame in generate_frames(model, track, runtime="int8")]
     fp32 = [frame for _, frame in generate_frames(model, track, runtime="onnx")]

@@ -83,6 +83,10 @@ def _swap_side(name: str) -> str:
         return "r_" + name[2:]
     if name.startswith("r_"):
         return "l_" + name[2:]
+    if name.endswith("_left"):
+        return name[: -len("left")] + "right"
+    if name.endswith("_right"):
+        return name[: -len("right")] + "left"
     return name
 
 
@@ -187,7 +191,35 @@ MEDIAPIPE33 = JointLayout(
     colors=tuple(_mp_color(n) for n in _MP33_JOINTS),
 )
 
-LAYOUTS: dict[str, JointLayout] = {lay.name: lay for lay in (BODY25, BODY15, COCO18, COCO17, MEDIAPIPE33)}
+# The pose maps of reference models: body15 and the details that tell front from back and show the hands and
+# feet (face: eyes, ears, mouth corners; hands: thumb, index and pinky; feet: heel and big toe). MediaPipe's 33
+# landmarks give all of them, BODY_25 all but the mouth and hands. Colours: the body's, then per part and side.
+_DETAIL_JOINTS = (
+    "r_eye", "l_eye", "r_ear", "l_ear", "mouth_right", "mouth_left",
+    "r_thumb", "r_index", "r_pinky", "l_thumb", "l_index", "l_pinky",
+    "r_heel", "r_big_toe", "l_heel", "l_big_toe",
+)
+_DETAIL_COLORS: tuple[RGB, ...] = (
+    (255, 255, 255), (255, 255, 255), (255, 0, 255), (0, 255, 255), (255, 128, 128), (255, 128, 128),
+    (255, 200, 0), (255, 140, 0), (255, 80, 0), (0, 200, 255), (0, 140, 255), (0, 80, 255),
+    (200, 255, 0), (120, 255, 0), (0, 255, 200), (0, 255, 120),
+)
+BODY31 = JointLayout(
+    name="body31",
+    joints=_BODY25_JOINTS[:15] + _DETAIL_JOINTS,
+    limbs=_BODY15_LIMBS + (
+        ("nose", "r_eye"), ("nose", "l_eye"), ("r_eye", "r_ear"), ("l_eye", "l_ear"), ("mouth_right", "mouth_left"),
+        ("r_wrist", "r_thumb"), ("r_wrist", "r_index"), ("r_wrist", "r_pinky"),
+        ("l_wrist", "l_thumb"), ("l_wrist", "l_index"), ("l_wrist", "l_pinky"),
+        ("r_ankle", "r_heel"), ("r_ankle", "r_big_toe"), ("r_heel", "r_big_toe"),
+        ("l_ankle", "l_heel"), ("l_ankle", "l_big_toe"), ("l_heel", "l_big_toe"),
+    ),
+    colors=_BODY25_COLORS[:15] + _DETAIL_COLORS,
+)
+
+LAYOUTS: dict[str, JointLayout] = {
+    lay.name: lay for lay in (BODY25, BODY15, COCO18, COCO17, MEDIAPIPE33, BODY31)
+}
 
 
 def get_layout(name: str) -> JointLayout:

@@ -73,6 +73,10 @@ def train_ref(
         "--background/--no-background", help="Estimate the static background from the frames and let the "
         "generator composite the person over it (default; for a static camera). When resuming, the stored "
         "choice.")] = None,
+    details: Annotated[bool | None, typer.Option(
+        "--details/--no-details", help="Pose maps with the face, hands and feet the poses carry, the face drawn "
+        "only from the front (default); --no-details: the body15 skeleton alone. When resuming, the stored "
+        "choice.")] = None,
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
@@ -109,18 +113,23 @@ def train_ref(
         # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
         # stored one (e.g. to resume on more processes than the stored batch has samples).
         config = None
-        if size is not None or batch_size is not None or background is not None:
+        if size is not None or batch_size is not None or background is not None or details is not None:
             from clone.train_ref import load_resumable
 
             stored = load_resumable(out).training["config"]
             if background is not None and background != bool(stored.get("background", False)):
                 raise InputError(f"--{'' if background else 'no-'}background: the model was trained "
                                  f"{'without' if background else 'with'} a background plate; cannot resume so")
+            stored_details = stored.get("pose_layout", "body15") == "body31"
+            if details is not None and details != stored_details:
+                raise InputError(f"--{'' if details else 'no-'}details: the model's pose maps are "
+                                 f"{'detailed' if stored_details else 'body15 alone'}; cannot resume so")
             config = TrainConfig(size=size if size is not None else int(stored["size"]),
                                  batch_size=batch_size if batch_size is not None else int(stored["batch_size"]))
     else:
         config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1,
-                             background=background is not False)
+                             background=background is not False,
+                             pose_layout="body15" if details is False else "body31")
 
     with distributed.launched(dev) as dev, \
             progress_bar("train-ref", count=False, elapsed=True, enabled=distributed.current().is_main) as bar:

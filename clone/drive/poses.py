@@ -18,9 +18,11 @@ import logging
 import os
 from pathlib import Path
 
+import numpy as np
+
 from clone.choices import Method, StageMode
 from clone.drive.stage import StageFit, fit_to_stage
-from clone.model.reference import LAYOUT, ReferenceModel, file_sha256
+from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, file_sha256
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 from retarget.baselines.global_scale import ScaleStats, apply_global_scale, scale_stats
@@ -31,18 +33,20 @@ METHODS = tuple(m.value for m in Method)
 STAGES = tuple(s.value for s in StageMode)
 
 
-def read_driver(path: str | os.PathLike, max_gap: int = 5) -> PoseTrack:
-    """The driver's track as body15, gaps of at most ``max_gap`` frames filled linearly."""
+def read_driver(path: str | os.PathLike, max_gap: int = 5, layout: str = LAYOUT) -> PoseTrack:
+    """The driver's track in ``layout`` (body15; body31 keeps the face, hands and feet it has), gaps of at most
+    ``max_gap`` frames filled linearly."""
     from pose_io.readers import read_track
 
-    return driver_track(read_track(path), max_gap, str(path))
+    return driver_track(read_track(path), max_gap, str(path), layout)
 
 
-def driver_track(track: PoseTrack, max_gap: int = 5, name: str = "driver") -> PoseTrack:
-    """A driver's track as `clone drive` uses it: body15, gaps of at most ``max_gap`` frames filled linearly."""
+def driver_track(track: PoseTrack, max_gap: int = 5, name: str = "driver", layout: str = LAYOUT) -> PoseTrack:
+    """A driver's track as `clone drive` uses it: in ``layout`` (body15 or body31), gaps of at most ``max_gap``
+    frames filled linearly."""
     from pose_io.clean import fill_gaps
 
-    track = track.to_layout(LAYOUT)
+    track = track.to_layout(layout)
     if not (~track.missing).any():
         raise InputError(f"{name}: no visible joints in any frame")
     if max_gap > 0:
@@ -126,8 +130,12 @@ def drive_poses(
 ) -> tuple[PoseTrack, StageFit | None]:
     """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
 
+    The network and global scaling move body15; when the driver is body31 and the model draws details, the
+    driver's face, hands and feet are then carried onto the result through their parent bones
+    (:func:`pose_io.details.carry_details`).
+
     Args:
-        driver: the driver's track.
+        driver: the driver's track (body15, or body31 with details).
         model: the reference model.
         method: one of :data:`METHODS`.
         weights: retargeting weights (see :func:`retargeting_weights`).
@@ -152,11 +160,27 @@ def drive_poses(
             log.warning("driver frames are %dx%d, the reference's %dx%d; --method none uses the coordinates "
                         "as they are", *driver.image_size, *model.canvas.image_size)
         return driver.replace(image_size=model.canvas.image_size), None
+    body = driver.to_layout(LAYOUT)
     if method is Method.RETARGET:
-        driven = retarget_onto(driver, model, weights, device, refine_steps)
+        driven = retarget_onto(body, model, weights, device, refine_steps)
     else:
-        driven = global_scale_onto(driver, model)
-    return finish_driven(driven, driver, model.reference_track, method is Method.RETARGET, stage, foot_lock)
+        driven = global_scale_onto(body, model)
+    driven, fit = finish_driven(driven, body, model.reference_track, method is Method.RETARGET, stage, foot_lock)
+    if driver.layout == DETAIL_LAYOUT and model.pose_layout == DETAIL_LAYOUT:
+        driven = with_details(driven, driver)
+    return driven, fit
+
+
+def with_details(driven: PoseTrack, driver: PoseTrack) -> PoseTrack:
+    """A driven body15 track with the body31 driver's face, hands and feet carried onto it (body31)."""
+    from pose_io.details import carry_details
+
+    joints = carry_details(driven.joints, driver.joints, driver.joint_layout)
+    confidence = np.zeros(joints.shape[:2], dtype=np.float32)
+    confidence[:, : driven.joints.shape[1]] = driven.confidence
+    extra = slice(driven.joints.shape[1], None)
+    confidence[:, extra] = np.where(np.isfinite(joints[:, extra, 0]), driver.confidence[:, extra], 0.0)
+    return PoseTrack(joints, confidence, driven.fps, driven.image_size, DETAIL_LAYOUT)
 
 
 def finish_driven(

@@ -23,7 +23,7 @@ import torch
 from clone.choices import Method, StageMode
 from clone.drive.poses import METHODS, STAGES, drive_poses, read_driver
 from clone.model.canvas import full_frame_canvas
-from clone.model.reference import load_reference_model
+from clone.model.reference import LAYOUT, load_reference_model
 from clone.runtime.generate import generate_frames, side_by_side_frame
 from clone.runtime.pipeline import BackgroundSink
 from pose_io.atomic import check_new_output
@@ -86,7 +86,7 @@ def drive(
         method: ``retarget``, ``global-scale`` or ``none``.
         stage: ``reference``: keep the driven track on the part of the frame the reference occupied; ``raw``:
             as the method left it (see :func:`drive_poses`).
-        poses_out: also write the driven poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
+        poses_out: also write the driven body15 poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
         side_by_side: frames show driver skeleton | driven skeleton | result.
         device: where the networks run.
         weights: retargeting weights (default: those the model's codes came from, else the shipped ones).
@@ -123,11 +123,11 @@ def drive(
         raise InputError(str(err)) from None
     check_new_output(out, overwrite)
     model = load_reference_model(model_path)
-    driver = read_driver(driver_path, max_gap)
+    driver = read_driver(driver_path, max_gap, layout=model.pose_layout)
     driven, fit = drive_poses(driver, model, method, weights, str(device), stage, foot_lock, refine_steps)
     poses_path = Path(poses_out) if poses_out is not None else None
     if poses_path is not None:
-        check_poses_out(driven, poses_path, overwrite)
+        check_poses_out(driven.to_layout(LAYOUT), poses_path, overwrite)
 
     driver_canvas = full_frame_canvas(driver.image_size, model.canvas.size)
     total = driven.num_frames
@@ -149,7 +149,7 @@ def drive(
             if progress is not None:
                 progress(t + 1, total)
     if poses_path is not None:
-        write_track(driven, poses_path, overwrite=overwrite)
+        write_track(driven.to_layout(LAYOUT), poses_path, overwrite=overwrite)  # the network's joints
     width = model.canvas.size * (3 if side_by_side else 1)
     return DriveResult(out, total, driven.fps, (width, model.canvas.size), method, poses_path,
                        time.perf_counter() - t0, 0.0 if fit is None else fit.share)

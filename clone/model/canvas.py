@@ -197,7 +197,8 @@ def pose_thickness(size: int) -> int:
 
 
 def render_pose_map(joints: np.ndarray, size: int, layout: JointLayout) -> np.ndarray:
-    """The pose map the generator sees: the skeleton drawn on black. Shared by training and driving.
+    """The pose map the generator sees: the skeleton drawn on black (a body31 pose with its details,
+    :mod:`clone.model.detail_map`). Shared by training and driving.
 
     Args:
         joints: [J, 2] canvas pixel coordinates, NaN where missing.
@@ -207,4 +208,8 @@ def render_pose_map(joints: np.ndarray, size: int, layout: JointLayout) -> np.nd
     Returns:
         [size, size, 3] uint8 RGB.
     """
+    if layout.name == "body31":
+        from clone.model.detail_map import render_detail_map
+
+        return render_detail_map(joints, blank_canvas(size, size), pose_thickness(size))
     return draw_pose(blank_canvas(size, size), joints, layout, thickness=pose_thickness(size))

@@ -11,6 +11,8 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
 - ``track_summary``: frame counts, visible fractions, median bone lengths (for reports)
 - ``reference_codes``: ``ReferenceCodes.to_dict()`` of the retargeting network, or None; ``codes_weights``:
   the SHA-256 of the weights file that made them, ``codes_weights_path`` where that file was
+- ``pose_layout`` (optional, default ``body15``): the layout the pose maps are drawn in (``body31``: with face,
+  hands and feet)
 - ``background``: ``{"plate": [S, S, 3] uint8}``, the reference's background plate on the canvas
   (:mod:`clone.model.background`), or None; a generator with ``alpha`` or ``plate_input`` composites over it
 - ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
@@ -50,6 +52,8 @@ log = logging.getLogger(__name__)
 KIND = "clone2d-reference"
 FORMAT_VERSION = 3
 LAYOUT = "body15"
+DETAIL_LAYOUT = "body31"
+POSE_LAYOUTS = (LAYOUT, DETAIL_LAYOUT)  # what pose maps can show: the network's joints, or with the details
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +74,8 @@ class ReferenceModel:
         training: the training run's record and resume state (see the module docstring), or None.
         temporal: whether the generator takes the previous frame.
         plate: [S, S, 3] uint8 RGB background plate on the canvas, or None (a model trained without one).
+        pose_layout: the layout its pose maps are drawn in: ``body15`` (files before detailed maps) or
+            ``body31`` (with face, hands and feet; :mod:`clone.model.detail_map`).
     """
 
     generator_name: str
@@ -85,6 +91,7 @@ class ReferenceModel:
     training: dict[str, Any] | None = None
     temporal: bool = True
     plate: np.ndarray | None = None
+    pose_layout: str = LAYOUT
 
     def build_generator(self, device: torch.device | str = "cpu") -> UNetGenerator:
         """The generator with its weights, in eval mode on ``device``."""
@@ -182,6 +189,7 @@ def save_reference_model(model: ReferenceModel, path: str | os.PathLike, overwri
         "codes_weights": model.codes_weights,
         "codes_weights_path": model.codes_weights_path,
         "background": None if model.plate is None else {"plate": torch.from_numpy(model.plate.copy())},
+        "pose_layout": model.pose_layout,
     }
     if model.training is not None:
         # As it is: optimiser states have int keys and tensors that _to_storable would change.
@@ -240,6 +248,12 @@ def _plate(background: Any, config: GeneratorConfig, canvas: Canvas) -> np.ndarr
     return plate
 
 
+def _pose_layout(name: Any) -> str:
+    if name not in POSE_LAYOUTS:
+        raise ValueError(f"pose maps in an unknown layout {name!r}")
+    return str(name)
+
+
 def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
     """Read a reference model written by :func:`save_reference_model`.
 
@@ -265,6 +279,7 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
             training=_training(data.get("training")),
             temporal=bool(data.get("temporal", True)),
             plate=_plate(data.get("background"), config, canvas),
+            pose_layout=_pose_layout(data.get("pose_layout", LAYOUT)),
         )
         model.build_generator("cpu")  # fails here, not mid-drive, when the weights do not fit the config
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:

@@ -24,6 +24,7 @@ from clone.report.panels import pose_panel, side_by_side, still_indices
 from clone.report.results import PAGE, VIDEO, DriverInfo, GroundTruth, MethodResult
 from clone.report.write import write_report_files
 from pose_io.errors import InputError
+from pose_io.layouts import BODY15
 from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 
@@ -166,7 +167,8 @@ def _method_results(
     """
     at = sorted(kept.at)
     methods = {}
-    for m, track in driven.items():
+    for m, detailed in driven.items():
+        track = detailed.to_layout(BODY15.name)  # measured and drawn as the network's joints
         scores = evaluate_track(track, *reference, truth)
         if m in kept.scorers:
             scores = scores.merged(kept.scorers[m].scores())
@@ -255,7 +257,7 @@ def make_report(
     check_report_dir(out_dir, overwrite)  # before any slow work
     model = load_reference_model(model_path)
     canvas = model.canvas
-    driver = read_driver(driver_path, max_gap)
+    driver = read_driver(driver_path, max_gap, layout=model.pose_layout)
     total = driver.num_frames
     truth = None if gt_poses is None else read_gt_poses(gt_poses, total, canvas.image_size)
     truth_frames = None if gt_frames is None else open_gt_frames(gt_frames, total, canvas.image_size)

@@ -19,12 +19,14 @@ def draw_pose_maps(model: ReferenceModel, track: PoseTrack, chunk: int = 16) -> 
 
     Args:
         model: the reference model (its canvas).
-        track: body15 poses in the reference's image pixels.
+        track: poses in the reference's image pixels (body15, or body31 with the details :func:`clone.drive.poses.drive_poses`
+            carried over); drawn in the model's pose layout, a body15 model ignoring details.
         chunk: frames per yielded array.
 
     Yields:
         [C, S, S, 3] uint8 RGB pose maps, ``C = chunk`` except perhaps for the last.
     """
+    track = track.to_layout(model.pose_layout)
     for start in range(0, track.num_frames, chunk):
         joints = image_to_canvas(track.joints[start:start + chunk], model.canvas)  # [C, J, 2]
         yield np.stack([render_pose_map(j, model.canvas.size, track.joint_layout) for j in joints])  # [C, S, S, 3]

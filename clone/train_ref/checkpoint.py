@@ -50,6 +50,8 @@ class ReferenceInfo:
         codes_weights_path: where those weights were, or None.
         plate: [S, S, 3] uint8 background plate on the canvas, or None (a run without one, or before the
             frames are read).
+        details: the reference's track in the pose maps' layout (body31: with face, hands and feet), or None to
+            draw ``track``.
     """
 
     canvas: Canvas
@@ -60,6 +62,7 @@ class ReferenceInfo:
     codes_weights: str | None
     codes_weights_path: str | None
     plate: np.ndarray | None = None
+    details: PoseTrack | None = None
 
 
 def checkpoint_model(
@@ -96,6 +99,7 @@ def checkpoint_model(
         training=training,
         temporal=config.temporal,
         plate=reference.plate,
+        pose_layout=config.pose_layout,
     )
 
 

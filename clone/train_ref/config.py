@@ -8,6 +8,7 @@ from typing import Any
 from clone.choices import PrevSource
 from clone.model.background import PlateConfig
 from clone.model.networks import DiscriminatorConfig, GeneratorConfig, default_depth
+from clone.model.reference import POSE_LAYOUTS
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,8 @@ class TrainConfig:
             its frames over it (RGB + alpha); the plate is stored in the model.
         plate_input: G also sees the plate as input channels (with ``background``).
         plate: how the plate is estimated.
+        pose_layout: what the pose maps show: ``body31`` (body15 with the face, hands and feet, front and back
+            told apart, :mod:`clone.model.detail_map`) or ``body15`` (the skeleton alone, as models before it).
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
         steps: default number of steps when neither steps nor minutes are given.
         preview_every: steps between preview images.
@@ -94,6 +97,7 @@ class TrainConfig:
     background: bool = True
     plate_input: bool = False
     plate: PlateConfig = field(default_factory=PlateConfig)
+    pose_layout: str = "body31"
     min_visible_joints: int = 10
     steps: int = 2000
     preview_every: int = 250
@@ -110,6 +114,8 @@ class TrainConfig:
             valid = ", ".join(s.value for s in PrevSource)
             raise ValueError(f"unknown prev_source {self.prev_source!r}; valid: {valid}") from None
         object.__setattr__(self, "prev_source", source)
+        if self.pose_layout not in POSE_LAYOUTS:
+            raise ValueError(f"unknown pose_layout {self.pose_layout!r}; valid: {', '.join(POSE_LAYOUTS)}")
         if self.base_channels is None:
             object.__setattr__(self, "base_channels", 16 if self.size >= 256 else 32)
 
@@ -145,4 +151,6 @@ class TrainConfig:
         plate = PlateConfig(**data.pop("plate", {}))
         # Runs stored before the background plate trained without one.
         data.setdefault("background", False)
+        # Runs stored before detailed pose maps drew body15.
+        data.setdefault("pose_layout", "body15")
         return cls(**data, augment=augment, loss=loss, plate=plate)

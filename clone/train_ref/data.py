@@ -49,20 +49,21 @@ class ReferenceData:
 
     Attributes:
         frames: [N, S, S, 3] uint8 RGB (in memory or memory-mapped).
-        joints: [N, J, 2] float32 canvas pixels, NaN where missing.
+        joints: [N, J, 2] float32 canvas pixels in ``layout`` (the pose maps'), NaN where missing.
         usable: [N] bool, frames trained on.
         size: S.
         plate: [S, S, 3] uint8 RGB background plate, or None (see :func:`reference_plate`).
+        layout: the joints' layout (body15, or body31 with the details).
     """
 
     def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int,
-                 plate: np.ndarray | None = None) -> None:
+                 plate: np.ndarray | None = None, layout: str = LAYOUT) -> None:
         self.frames = frames
         self.joints = joints
         self.usable = usable
         self.size = size
         self.plate = plate
-        self.layout = get_layout(LAYOUT)
+        self.layout = get_layout(layout)
         self.indices = np.flatnonzero(usable)
 
     def pose_map(self, i: int) -> np.ndarray:
@@ -134,7 +135,7 @@ def frame_store(count: int, size: int) -> Iterator[np.ndarray]:
 
 
 def read_reference(
-    poses_path: str | os.PathLike, frames_path: str | os.PathLike, align: str = "exact"
+    poses_path: str | os.PathLike, frames_path: str | os.PathLike, align: str = "exact", layout: str = LAYOUT,
 ) -> tuple[PoseTrack, Frames, int]:
     """Open the reference's poses and frames and check that they belong together.
 
@@ -142,9 +143,10 @@ def read_reference(
         poses_path: any pose track ``pose_io`` reads.
         frames_path: a video or a folder of images.
         align: ``exact`` (counts must agree) or ``trim`` (use the common prefix).
+        layout: the layout of the returned track (body15; body31 keeps the face, hands and feet the poses have).
 
     Returns:
-        ``(track in body15 with the frames' image size, frame stream, frame count to use)``.
+        ``(track in ``layout`` with the frames' image size, frame stream, frame count to use)``.
     """
     from pose_io.readers import read_detections, track_from_detections
     from pose_io.video import read_frames
@@ -161,7 +163,7 @@ def read_reference(
     track = track_from_detections(detections, fps=None, image_size=tuple(frames.size))
     if frames.kind == "video":
         track = track.replace(fps=frames.fps)
-    track = track.to_layout(LAYOUT)
+    track = track.to_layout(layout)
     n_frames, n_poses = frames.num_frames, track.num_frames
     if n_frames != n_poses:
         if align != "trim":

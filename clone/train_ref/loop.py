@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
-from clone.model.reference import ReferenceModel, preview_path
+from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
 from clone.train_ref.augment import random_affines, warp_batch
 from clone.train_ref.checkpoint import ReferenceInfo
 from clone.train_ref.config import TrainConfig
@@ -129,9 +129,12 @@ def train_reference(
         raise InputError(f"--batch-size: {exc}") from None
     if steps is None and minutes is None:
         steps = config.steps
-    track, frames, count = read_reference(poses_path, frames_path, align)
+    detailed, frames, count = read_reference(poses_path, frames_path, align, layout=DETAIL_LAYOUT)
+    track = detailed.to_layout(LAYOUT)
     usable = _usable(track, config.min_visible_joints, poses_path, count)
     reference = _reference_info(track, usable, config, previous, frames_path, weights)
+    if config.pose_layout == DETAIL_LAYOUT:
+        reference = replace(reference, details=detailed)
     device = torch.device(device)
     run = start_run(out, reference, config, device=device, previous=previous, progress=progress, world=world,
                     part=part, dtype=distributed.amp_dtype(device, amp))
@@ -204,7 +207,8 @@ def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarra
         store[i] = cut_frame(frame, canvas)
         run.report(StepProgress("reading", i + 1, count, run.elapsed(), None, {}))
     log.info("read %d frames in %.1f s", count, run.elapsed())
-    return ReferenceData(store, image_to_canvas(run.reference.track.joints, canvas), usable, canvas.size)
+    drawn = run.reference.details if run.reference.details is not None else run.reference.track
+    return ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout)
 
 
 def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel | None) -> None:

@@ -10,14 +10,15 @@ from pose_io.layouts import DERIVED, conversion_plan, convert_arrays, require_co
 
 
 def test_registry_names_its_layouts():
-    assert set(LAYOUTS) == {"body25", "body15", "coco18", "coco17", "mediapipe33"}
+    assert set(LAYOUTS) == {"body25", "body15", "coco18", "coco17", "mediapipe33", "body31"}
     for name, layout in LAYOUTS.items():
         assert layout.name == name and get_layout(name) is layout
-    assert [len(LAYOUTS[n]) for n in ("body25", "body15", "coco18", "coco17", "mediapipe33")] == [25, 15, 18, 17, 33]
+    assert [len(LAYOUTS[n]) for n in ("body25", "body15", "coco18", "coco17", "mediapipe33", "body31")] == [
+        25, 15, 18, 17, 33, 31]
 
 
 def test_unknown_layout_lists_valid_ones():
-    with pytest.raises(ValueError, match="unknown joint layout 'smpl'; valid: body15, body25, coco17, coco18"):
+    with pytest.raises(ValueError, match="unknown joint layout 'smpl'; valid: body15, body25, body31, coco17, coco18"):
         get_layout("smpl")
 
 
@@ -35,13 +36,15 @@ def test_every_layout_is_consistent(layout):
     assert limbs.shape == (len(layout.limbs), 2) and limbs.dtype == np.int64
     assert [(layout.joints[a], layout.joints[b]) for a, b in limbs] == list(layout.limbs)
     assert layout.indices(list(layout.joints)) == list(range(len(layout)))
-    # Mirroring is an involution that swaps l_ and r_ joints and keeps the others.
+    # Mirroring is an involution that swaps l_/r_ joints and _left/_right ones and keeps the others.
     perm = layout.mirror
     np.testing.assert_array_equal(perm[perm], np.arange(len(layout)))
     for i, name in enumerate(layout.joints):
         other = layout.joints[perm[i]]
         if name.startswith(("l_", "r_")):
             assert other[2:] == name[2:] and other[0] != name[0]
+        elif name.endswith(("_left", "_right")):
+            assert other.rsplit("_", 1)[0] == name.rsplit("_", 1)[0] and other != name
         else:
             assert other == name
 

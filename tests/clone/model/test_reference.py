@@ -216,3 +216,17 @@ def test_a_missing_or_wrong_plate_is_a_damaged_model(tmp_path):
         torch.save({**data, "background": background}, path)
         with pytest.raises(InputError, match=f"damaged reference model \\(.*{message}"):
             load_reference_model(path)
+
+
+def test_pose_layout_round_trip_and_files_before_it_draw_body15(tmp_path):
+    assert _model().pose_layout == "body15"
+    back = load_reference_model(save_reference_model(_model(pose_layout="body31"), tmp_path / "ref.pt"))
+    assert back.pose_layout == "body31"
+    path = save_reference_model(_model(), tmp_path / "old.pt")
+    data = torch.load(path, weights_only=True)
+    del data["pose_layout"]  # files before detailed pose maps had no such entry
+    torch.save(data, path)
+    assert load_reference_model(path).pose_layout == "body15"
+    torch.save({**data, "pose_layout": "smpl"}, path)
+    with pytest.raises(InputError, match="damaged reference model \\(.*unknown layout 'smpl'"):
+        load_reference_model(path)
