@@ -24,6 +24,7 @@ import numpy as np
 from pose_io.atomic import atomic_dir
 from pose_io.errors import InputError, raise_if_interrupted
 from pose_io.layouts import MEDIAPIPE33
+from pose_io.quiet import quiet_native_logs
 from pose_io.track import PoseTrack
 from pose_io.video import Frames, read_frames
 from pose_io.writers import write_track
@@ -126,9 +127,9 @@ def extract_track(
         A mediapipe33 track with the stream's fps and frame size (frames without a person are all
         missing).
     """
-    mp_pose = load_mediapipe_pose()
     joints, conf = [], []
-    with warnings.catch_warnings():
+    with quiet_native_logs(), warnings.catch_warnings():
+        mp_pose = load_mediapipe_pose()
         warnings.simplefilter("ignore", UserWarning)  # protobuf deprecation noise from inside mediapipe
         with mp_pose.Pose(
             static_image_mode=config.static_image_mode,
@@ -176,7 +177,8 @@ def extract_video(
     Raises:
         InputError: unreadable video, MediaPipe missing, or no person in any frame.
     """
-    load_mediapipe_pose()  # fail before anything is read or written
+    with quiet_native_logs():
+        load_mediapipe_pose()  # fail before anything is read or written
     frames = read_frames(video)
     total = frames.num_frames if progress is not None else 0
     out_dir = Path(out_dir)
