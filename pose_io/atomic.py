@@ -27,6 +27,44 @@ def mark_used(path: Path) -> None:
         log.debug("cannot mark %s as used (%s)", path, exc)
 
 
+def cache_root() -> Path:
+    """Where clone2d keeps its caches (motion worlds, int8 generators, extracted poses): ``$CLONE2D_CACHE``
+    when set, else ``~/.cache/clone2d``."""
+    root = os.environ.get("CLONE2D_CACHE")
+    return Path(root) if root else Path.home() / ".cache" / "clone2d"
+
+
+def prune_lru(folder: Path, pattern: str, keep: Path, max_bytes: int, what: str = "cache") -> list[Path]:
+    """Delete the least recently used files matching ``pattern`` in ``folder`` until the rest fit in ``max_bytes``.
+
+    ``keep`` (the entry just written) always stays, whatever its size; other files are left alone.
+
+    Returns:
+        The deleted files.
+    """
+    entries = []
+    for file in folder.glob(pattern):
+        try:
+            stat = file.stat()
+        except OSError:  # deleted meanwhile by another process
+            continue
+        entries.append((file == keep, stat.st_mtime_ns, stat.st_size, file))
+    entries.sort(key=lambda e: (e[0], e[1]), reverse=True)  # the kept file, then the newest first
+    total, deleted = 0, []
+    for is_kept, _, size, file in entries:
+        total += size
+        if total > max_bytes and not is_kept:
+            try:
+                file.unlink()
+                deleted.append(file)
+            except OSError as exc:
+                log.debug("cannot delete %s from the %s (%s)", file, what, exc)
+    if deleted:
+        log.info("%s: deleted %d least recently used entries to stay under %d MB", what, len(deleted),
+                 max_bytes // 2**20)
+    return deleted
+
+
 def _umask(probe_dir: Path) -> int:
     """The process's file-creation mask, read without changing it (``os.umask`` can only be read by setting).
 

@@ -24,6 +24,9 @@ Formats (``fmt``), detected from the path unless given:
   header ``frame,<joint>_x,<joint>_y,<joint>_c,...`` with joint names of one layout (``_c`` columns
   optional, default 1), one row per frame. Empty cells or ``nan`` mark a missing joint; missing frame
   numbers are empty frames.
+- ``video``: a video file (``.mp4``, ``.mov``, ``.avi``, ``.mkv``, ``.webm`` ...): MediaPipe's 33 points
+  extracted once and cached by the video's content (:mod:`pose_io.video_poses`), with the video's fps and
+  frame size.
 
 Frame rate and image size: a value given by the caller wins, then the one stored in the file (npz,
 csv header, OpenPose sidecar); otherwise fps is 30 and the image size is inferred from the data: the
@@ -56,6 +59,7 @@ from pose_io.read_common import LAYOUT_BY_JOINTS, parse_size
 from pose_io.read_json import load_json, read_openpose, read_results
 from pose_io.summary import TrackSummary, summarize_detections
 from pose_io.track import PoseTrack
+from pose_io.video_poses import VIDEO_SUFFIXES, video_track_path
 
 __all__ = [
     "LAYOUT_BY_JOINTS", "READERS", "TrackSummary", "detect_format", "parse_size", "read_detections", "read_track",
@@ -156,6 +160,8 @@ def detect_format(path: Path) -> str:
     suffix = path.suffix.lower()
     if suffix in (".npz", ".npy", ".csv"):
         return suffix[1:]
+    if suffix in VIDEO_SUFFIXES:
+        return "video"
     if suffix == ".json":
         data = load_json(path)
         if isinstance(data, dict) and "people" in data:
@@ -164,7 +170,7 @@ def detect_format(path: Path) -> str:
             return "alphapose" if isinstance(data[0].get("image_id"), str) else "coco"
         raise InputError(f"{path}: not a COCO or AlphaPose keypoint results list")
     raise InputError(f"{path}: unknown pose file type {suffix or '(no suffix)'}; expected a folder of OpenPose "
-                     "JSON, .json (COCO/AlphaPose results), .npz, .npy or .csv")
+                     "JSON, .json (COCO/AlphaPose results), .npz, .npy, .csv or a video")
 
 
 READERS: dict[str, Callable[[Path], Detections]] = {
@@ -174,4 +180,5 @@ READERS: dict[str, Callable[[Path], Detections]] = {
     "npz": read_npz,
     "npy": read_npy,
     "csv": read_csv,
+    "video": lambda p: read_npz(video_track_path(p)),
 }

@@ -49,10 +49,14 @@ class VideoWriter:
         fps: frame rate.
         overwrite: replace an existing file; otherwise an existing ``path`` is an InputError.
         crf: x264 constant rate factor (0 lossless .. 51 worst; 18 is visually lossless).
+        audio: a file whose sound the video gets, from its start, cut to the video's length
+            (:func:`pose_io.audio.mux_audio`); None: silent.
     """
 
-    def __init__(self, path: str | os.PathLike, fps: float, overwrite: bool = False, crf: int = 18) -> None:
+    def __init__(self, path: str | os.PathLike, fps: float, overwrite: bool = False, crf: int = 18,
+                 audio: str | os.PathLike | None = None) -> None:
         self.path = Path(path)
+        self.audio = Path(audio) if audio is not None else None
         self.fps = check_fps(fps, f"{self.path}: fps")
         self.crf = int(crf)
         self.overwrite = overwrite
@@ -103,6 +107,10 @@ class VideoWriter:
                 self._gen.close()  # waits for ffmpeg to finish the file
             if exc_type is None and self.frames_written == 0:
                 raise InputError(f"{self.path}: no frames to write")
+            if exc_type is None and self.audio is not None:
+                from pose_io.audio import mux_audio
+
+                mux_audio(self._tmp, self.audio, self.frames_written / self.fps)  # type: ignore[arg-type]
         except BaseException as err:
             self._stack.__exit__(type(err), err, err.__traceback__)
             raise

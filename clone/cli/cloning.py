@@ -19,13 +19,14 @@ from clone.cli.common import (
     DEVICE_HELP,
     MAX_REFINE_STEPS,
     MAX_THREADS,
+    AudioOption,
     RefineStepsOption,
     console,
     resolve_device_option,
     training_device,
     user_errors,
 )
-from clone.cli.progress import progress_bar
+from clone.cli.progress import extract_if_video, progress_bar
 from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
@@ -41,8 +42,12 @@ MAX_GAP = 100_000
 
 @user_errors
 def train_ref(
-    ref_poses: Annotated[Path, typer.Argument(help="The reference's poses: any track `clone pose` reads.")],
-    frames: Annotated[Path, typer.Argument(help="The reference's frames: a video or a folder of images.")],
+    ref_poses: Annotated[Path, typer.Argument(
+        help="The reference: its video (poses extracted once, then cached), or its poses in any track "
+        "`clone pose` reads.")],
+    frames: Annotated[Path | None, typer.Argument(
+        help="The reference's frames: a video or a folder of images (default: REF_POSES when it is a video).")
+    ] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Reference model to write.")] = DEFAULT_MODEL,
     size: Annotated[int | None, typer.Option(
         "--size", help=f"Canvas size: 128, 256 or 512 (any power of two from {MIN_SIZE} to {MAX_SIZE}). "
@@ -80,6 +85,8 @@ def train_ref(
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
+    clone train-ref REF.mp4 takes poses and frames from the one video.
+
     Writes ONE model (default ./ref_model.pt, where `clone drive` looks for it).
 
     The model also holds its training state: --resume continues it exactly.
@@ -105,10 +112,17 @@ def train_ref(
     # Every output is checked before the frames are read: the model, and the preview written beside it.
     check_output(out, "--out", overwrite=overwrite, replaceable=resume)
     check_output(preview_path(out), "--out (its preview)", suffixes=(".png",), overwrite=overwrite or resume)
+    from pose_io.video_poses import is_video
+
+    if frames is None:
+        if not is_video(ref_poses):
+            raise InputError(f"FRAMES: needed when REF_POSES is not a video ({ref_poses})")
+        frames = ref_poses
     for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights)):
         if path is not None and not path.exists():
             raise InputError(f"{name} {path}: no such file or folder")
     dev = training_device(device, threads)
+    extract_if_video(ref_poses)  # under torchrun each process reads the same cache entry (atomic writes)
     if resume:
         # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
         # stored one (e.g. to resume on more processes than the stored batch has samples).
@@ -162,7 +176,9 @@ def train_ref(
 
 @user_errors
 def drive(
-    drive_poses: Annotated[Path, typer.Argument(help="The driver's poses: any track `clone pose` reads.")],
+    drive_poses: Annotated[Path, typer.Argument(
+        help="The driver: a video (poses extracted once, then cached) or its poses in any track `clone pose` "
+        "reads.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Video to write (.mp4, H.264).")],
     model: Annotated[Path, typer.Option(
         "--model", "-m", help="Reference model from `clone train-ref`.")] = DEFAULT_MODEL,
@@ -197,6 +213,7 @@ def drive(
         "against the slide, then the ankles, knees re-solved; removes foot skating at the same pose error).")
     ] = True,
     refine_steps: RefineStepsOption = None,
+    audio: AudioOption = "auto",
 ) -> None:
     """Make a video of the reference performing the driver's motion."""
     from clone.drive.run import drive as run_drive
@@ -211,15 +228,17 @@ def drive(
         if poses_out.absolute() == out.absolute():
             raise InputError(f"--poses-out {poses_out}: the same path as --out")
     dev = resolve_device_option(device, threads)
+    extract_if_video(drive_poses)
     with progress_bar("drive") as bar:
         result = run_drive(
             drive_poses, out, model_path=model, method=method.value, stage=stage.value, poses_out=poses_out,
             side_by_side=side_by_side, foot_lock=foot_lock, refine_steps=refine_steps,
             device=dev, weights=weights, overwrite=overwrite, max_gap=max_gap, runtime=runtime,
-            progress=bar,
+            progress=bar, audio=audio,
         )
     console.print(f"wrote {result.out}: {result.frames} frames {result.size[0]}x{result.size[1]} at "
-                  f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)")
+                  f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)"
+                  + (f", with the sound of {result.audio}" if result.audio is not None else ""))
     if result.stage_share > 0:
         console.print(f"kept on the reference's stage: {100 * result.stage_share:.1f}% of frames were off it "
                       "(--stage raw keeps them there)")

@@ -164,3 +164,8 @@ def resolve_device_option(spec: str, threads: int | None = None):  # -> torch.de
     if device.type == "cpu":
         configure_threads(threads)
     return device
+
+
+AudioOption = Annotated[str, typer.Option(
+    "--audio", help="The output's sound: auto: the driver's, when it is a video with sound; none: silent; or "
+    "FILE: that file's sound, from its start, cut to the output's length.")]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from clone.cli.common import console
@@ -63,3 +64,19 @@ def progress_bar(label: str, *, count: bool = True, elapsed: bool = False, remai
     columns += [TimeRemainingColumn()] if remaining else []
     with Progress(*columns, console=console, transient=True, disable=not enabled) as progress:
         yield Bar(progress, progress.add_task(label, total=None, text=""))
+
+
+def extract_if_video(path: Path | None) -> None:
+    """When ``path`` is a video, extract its poses now (into the cache, under a bar with frames/s), so the command's
+    own reading finds them there; a pose file or folder is left alone."""
+    from pose_io.video_poses import extraction_progress, is_video, video_track_path
+
+    if path is None or not is_video(path) or not path.is_file():
+        return
+    with progress_bar(f"poses of {path.name}") as bar:
+
+        def update(done: int, total: int, seconds: float) -> None:
+            bar(done, total, text=f"{done / max(seconds, 1e-6):.1f} frames/s")
+
+        with extraction_progress(update):
+            video_track_path(path)

@@ -11,8 +11,15 @@ from typing import Annotated
 import typer
 
 from clone.cli.choices import StageMode
-from clone.cli.common import DEVICE_HELP, MAX_REFINE_STEPS, RefineStepsOption, console, user_errors
-from clone.cli.progress import progress_bar
+from clone.cli.common import (
+    DEVICE_HELP,
+    MAX_REFINE_STEPS,
+    AudioOption,
+    RefineStepsOption,
+    console,
+    user_errors,
+)
+from clone.cli.progress import extract_if_video, progress_bar
 
 # The primary pose measure first (with ground truth), as on the page; rows a run lacks are left out.
 _HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssim", "psnr_background",
@@ -21,7 +28,8 @@ _HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssi
 
 @user_errors
 def report_command(
-    drive_poses: Annotated[Path, typer.Argument(help="The driver's poses (any format `clone pose` reads).")],
+    drive_poses: Annotated[Path, typer.Argument(
+        help="The driver: a video (poses extracted once, then cached) or its poses (any format `clone pose` reads).")],
     out: Annotated[
         Path, typer.Option("--out", help="Report folder to write (report.html, video, plots, metrics.json).")
     ],
@@ -53,6 +61,7 @@ def report_command(
         ),
     ] = StageMode.REFERENCE,
     refine_steps: RefineStepsOption = None,
+    audio: AudioOption = "auto",
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.table import Table
@@ -74,11 +83,12 @@ def report_command(
     except ValueError as exc:
         raise InputError(str(exc)) from None
     configure_threads()
+    extract_if_video(drive_poses)
     with progress_bar("report") as bar:
         run = make_report(
             drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
             device=dev, weights=weights, progress=bar,
-            stage=stage.value, refine_steps=refine_steps,
+            stage=stage.value, refine_steps=refine_steps, audio=audio,
         )  # fmt: skip
     table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")
     table.add_column("measure")

@@ -27,6 +27,7 @@ from clone.model.reference import LAYOUT, load_reference_model
 from clone.runtime.generate import generate_frames, side_by_side_frame
 from clone.runtime.pipeline import BackgroundSink
 from pose_io.atomic import check_new_output
+from pose_io.audio import resolve_audio
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 
@@ -45,6 +46,7 @@ class DriveResult:
     poses_out: Path | None
     seconds: float
     stage_share: float = 0.0  # share of frames that were off the reference's stage and moved onto it
+    audio: Path | None = None  # the file whose sound the video carries
 
 
 def check_poses_out(track: PoseTrack, path: Path, overwrite: bool) -> None:
@@ -76,6 +78,7 @@ def drive(
     runtime: str = "auto",
     foot_lock: bool = True,
     refine_steps: int | None = None,
+    audio: str | os.PathLike | None = "auto",
 ) -> DriveResult:
     """Make a video of the reference performing the driver's motion.
 
@@ -97,6 +100,8 @@ def drive(
             installed, else torch), ``torch``, ``onnx`` or ``int8`` (see :func:`clone.runtime.generate.build_drive_generator`).
         foot_lock: clean up foot skating of ``retarget`` with the driver's contacts (see :func:`drive_poses`).
         refine_steps: motion-code refinement steps of ``retarget`` (None: inference's default; 0: none, fastest).
+        audio: the output's sound: ``auto`` the driver's when it is a video with sound, ``none`` (or None)
+            silent, else a file with an audio stream (:func:`pose_io.audio.resolve_audio`).
 
     Returns:
         What was written.
@@ -122,6 +127,7 @@ def drive(
     except ValueError as err:
         raise InputError(str(err)) from None
     check_new_output(out, overwrite)
+    sound = resolve_audio(audio, driver_path)
     model = load_reference_model(model_path)
     driver = read_driver(driver_path, max_gap, layout=model.pose_layout)
     driven, fit = drive_poses(driver, model, method, weights, str(device), stage, foot_lock, refine_steps)
@@ -141,7 +147,7 @@ def drive(
     # Three stages overlap: pose maps are drawn in a thread (generate_frames), the generator runs here, and
     # frames go to the encoder from another thread; an error in any of them ends the with blocks, which
     # stop the threads and remove the unfinished video.
-    with VideoWriter(out, fps=driven.fps, overwrite=overwrite) as video, \
+    with VideoWriter(out, fps=driven.fps, overwrite=overwrite, audio=sound) as video, \
             BackgroundSink(encode, depth=4, name="encode") as sink, \
             closing(generate_frames(model, driven, device, runtime=runtime)) as frames:
         for t, (pose_map, frame) in enumerate(frames):
@@ -152,4 +158,4 @@ def drive(
         write_track(driven.to_layout(LAYOUT), poses_path, overwrite=overwrite)  # the network's joints
     width = model.canvas.size * (3 if side_by_side else 1)
     return DriveResult(out, total, driven.fps, (width, model.canvas.size), method, poses_path,
-                       time.perf_counter() - t0, 0.0 if fit is None else fit.share)
+                       time.perf_counter() - t0, 0.0 if fit is None else fit.share, sound)

@@ -23,6 +23,7 @@ from clone.report.ground_truth import cut_gt_frames, open_gt_frames, read_gt_pos
 from clone.report.panels import pose_panel, side_by_side, still_indices
 from clone.report.results import PAGE, VIDEO, DriverInfo, GroundTruth, MethodResult
 from clone.report.write import write_report_files
+from pose_io.audio import resolve_audio
 from pose_io.errors import InputError
 from pose_io.layouts import BODY15
 from pose_io.measures import reference_limb_lengths, skeleton_height
@@ -111,8 +112,10 @@ def _write_video(
     kept: _Kept,
     device: str,
     progress: Callable[[int, int], None] | None,
+    audio: Path | None = None,
 ) -> None:
-    """Generate every method's frames and write driver | methods | ground truth side by side to ``path``.
+    """Generate every method's frames and write driver | methods | ground truth side by side to ``path``
+    (with the sound of ``audio`` when given).
 
     Args:
         path: the mp4 to write.
@@ -131,7 +134,7 @@ def _write_video(
     labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)]
     labels += ["Ground truth"] if truth_frames is not None else []
     streams = [generate_frames(model, track, device) for track in driven.values()]
-    with VideoWriter(path, fps=driver.fps) as video:
+    with VideoWriter(path, fps=driver.fps, audio=audio) as video:
         for t, outputs in enumerate(zip(*streams)):
             frames = dict(zip(driven, (frame for _pose_map, frame in outputs)))  # [S, S, 3] uint8 each
             true_frame = None if truth_frames is None else next(truth_frames)
@@ -229,6 +232,7 @@ def make_report(
     progress: Callable[[int, int], None] | None = None,
     stage: str = "reference",
     refine_steps: int | None = None,
+    audio: str | os.PathLike | None = "auto",
 ) -> ReportRun:
     """Drive the reference model with both methods, measure them and write the report folder.
 
@@ -245,6 +249,8 @@ def make_report(
         progress: called with (frames done, total) after every frame.
         stage: ``reference`` or ``raw`` (see ``clone.drive.poses.drive_poses``).
         refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
+        audio: the video's sound: ``auto`` the driver's when it is a video with sound, ``none`` silent, else a
+            file (see :func:`pose_io.audio.resolve_audio`).
 
     Returns:
         Where the page is and the summary numbers.
@@ -255,6 +261,7 @@ def make_report(
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
     check_report_dir(out_dir, overwrite)  # before any slow work
+    sound = resolve_audio(audio, driver_path)
     model = load_reference_model(model_path)
     canvas = model.canvas
     driver = read_driver(driver_path, max_gap, layout=model.pose_layout)
@@ -272,7 +279,7 @@ def make_report(
 
     with report_dir(out_dir, overwrite) as folder:
         cut = None if truth_frames is None else cut_gt_frames(truth_frames, gt_frames, total, canvas)
-        _write_video(folder / VIDEO, model, driver, driven, cut, kept, device, progress)
+        _write_video(folder / VIDEO, model, driver, driven, cut, kept, device, progress, sound)
         methods = _method_results(driven, model, reference, truth, kept, shares)
         gt_info = _ground_truth_info(gt_poses, gt_frames, truth_canvas, kept.gt_stills)
         info = DriverInfo(driver, str(driver_path), str(model_path), _driver_baseline(driver))

@@ -32,7 +32,7 @@ from clone.model.reference import ReferenceModel
 from clone.model.tensors import to_tensor
 from clone.runtime.onnx import OnnxGenerator
 from clone.runtime.pose_maps import draw_pose_maps
-from pose_io.atomic import atomic_file, mark_used
+from pose_io.atomic import atomic_file, mark_used, prune_lru
 from pose_io.errors import raise_if_interrupted
 
 log = logging.getLogger(__name__)
@@ -181,34 +181,8 @@ def write_cached(path: Path, model: bytes) -> None:
 
 
 def prune_cache(folder: Path, keep: Path, max_bytes: int = MAX_CACHE_BYTES) -> list[Path]:
-    """Delete the least recently used ``*.int8.onnx`` in ``folder`` until the rest fit in ``max_bytes``.
-
-    ``keep`` (the model just written) always stays, whatever its size; other files are left alone.
-
-    Returns:
-        The deleted files.
-    """
-    entries = []
-    for file in folder.glob("*.int8.onnx"):
-        try:
-            stat = file.stat()
-        except OSError:  # deleted meanwhile by another drive
-            continue
-        entries.append((file == keep, stat.st_mtime_ns, stat.st_size, file))
-    entries.sort(key=lambda e: (e[0], e[1]), reverse=True)  # the kept file, then the newest first
-    total, deleted = 0, []
-    for is_kept, _, size, file in entries:
-        total += size
-        if total > max_bytes and not is_kept:
-            try:
-                file.unlink()
-                deleted.append(file)
-            except OSError as exc:
-                log.debug("cannot delete %s from the cache (%s)", file, exc)
-    if deleted:
-        log.info("int8 cache: deleted %d least recently used model(s) to stay under %d MB", len(deleted),
-                 max_bytes // 2**20)
-    return deleted
+    """Delete the least recently used ``*.int8.onnx`` in ``folder`` until the rest fit (``keep`` stays)."""
+    return prune_lru(folder, "*.int8.onnx", keep, max_bytes, "int8 cache")
 
 
 def build_int8_generator(model: ReferenceModel, threads: int | None = None, cache_dir: Path | None = None,

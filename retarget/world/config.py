@@ -14,8 +14,10 @@ SPLITS: tuple[str, ...] = ("train", "val", "test")
 
 
 def default_cache_dir() -> Path:
-    """``~/.cache/clone2d/world``."""
-    return Path.home() / ".cache" / "clone2d" / "world"
+    """``~/.cache/clone2d/world`` (``$CLONE2D_CACHE/world`` when that is set)."""
+    from pose_io.atomic import cache_root
+
+    return cache_root() / "world"
 
 
 @dataclass(frozen=True)
