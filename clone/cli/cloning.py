@@ -57,7 +57,7 @@ def train_ref(
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
     batch_size: Annotated[int | None, typer.Option(
         "--batch-size", min=1, help="Samples per step over all processes (under torchrun each takes its share; "
-        "the learning rate is that of one process). Default 1; when resuming, the stored one.")] = None,
+        "the learning rate is that of one process). Default one per process; when resuming, the stored one.")] = None,
     canvas: Annotated[CanvasMode, typer.Option(
         "--canvas", parser=CanvasMode, help="crop: around the performer; full: the letterboxed frame.")
     ] = CanvasMode.CROP,
@@ -141,7 +141,9 @@ def train_ref(
             config = TrainConfig(size=size if size is not None else int(stored["size"]),
                                  batch_size=batch_size if batch_size is not None else int(stored["batch_size"]))
     else:
-        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or 1,
+        launched_world = distributed.from_environment()  # under torchrun: one sample per process by default
+        per_process = launched_world.size if launched_world is not None else 1
+        config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or per_process,
                              background=background is not False,
                              pose_layout="body15" if details is False else "body31")
 

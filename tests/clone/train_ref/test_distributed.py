@@ -76,6 +76,14 @@ def test_a_batch_smaller_than_the_processes_is_one_line_error(reference, tmp_pat
     poses, frames = reference
     out = tmp_path / "ref.pt"
     monkeypatch.setattr(distributed, "current", lambda: distributed.World(0, 2))  # as rank 0 of 2 sees it
-    error = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, steps=1)))  # --batch-size 1
+    error = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--batch-size", "1", steps=1)))
     assert error.startswith("error: --batch-size: a batch of 1 cannot be split over 2 processes")
     assert not out.exists()
+
+
+def test_torchrun_with_the_default_batch_trains_one_sample_per_process(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "ref.pt"
+    run = _torchrun(train_args(poses, frames, out, steps=1))  # no --batch-size
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert load_reference_model(out).training["config"]["batch_size"] == 2
