@@ -244,3 +244,18 @@ def test_a_generator_without_previous_frame_or_plate_quantises_too(model, tmp_pa
     with torch.no_grad():
         expected = plain.build_generator()(pose)
     assert np.abs(int8(pose).numpy() - expected.numpy()).mean() < 0.05
+
+
+def test_train_ref_leaves_the_int8_generator_in_the_cache(tmp_path):
+    pytest.importorskip("onnxruntime")
+    from clone.model.reference import load_reference_model
+    from tests.clone.train_ref.helpers import figure_track, train_args, write_reference
+
+    poses, frames = write_reference(tmp_path / "ref", figure_track(12))
+    out = tmp_path / "ref.pt"
+    run = CliRunner().invoke(app, train_args(poses, frames, out, steps=2))
+    assert run.exit_code == 0, run.output
+    assert "int8 generator for clone drive cached" in run.output
+    model = load_reference_model(out)
+    cached = int8_generator.generator_cache_dir() / f"{cache_key(model, QuantConfig())}.int8.onnx"
+    assert read_cached(cached) is not None  # the first drive finds it
