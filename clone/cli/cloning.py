@@ -263,6 +263,9 @@ def drive(
                       "(--stage raw keeps them there)")
     if result.poses_out is not None:
         console.print(f"wrote {result.poses_out}")
+    line = result.coverage.line() if result.coverage is not None else None
+    if line is not None:
+        console.print(line)
 
 
 @user_errors

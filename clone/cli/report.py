@@ -100,4 +100,6 @@ def report_command(
             values = [f"{s[key] * info.scale:.4g}" for s in run.summary.values()]
             table.add_row(f"{info.label} ({info.unit})" if info.unit else info.label, *values)
     console.print(table)
+    if run.coverage_line is not None:
+        console.print(run.coverage_line)
     typer.echo(f"wrote {run.page}")

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from clone.choices import Method, StageMode
+from clone.drive.coverage import Coverage, pose_coverage
 from clone.drive.poses import METHODS, STAGES, drive_poses, read_driver
 from clone.model.canvas import full_frame_canvas
 from clone.model.reference import LAYOUT, load_reference_model
@@ -47,6 +48,7 @@ class DriveResult:
     seconds: float
     stage_share: float = 0.0  # share of frames that were off the reference's stage and moved onto it
     audio: Path | None = None  # the file whose sound the video carries
+    coverage: Coverage | None = None  # how much of the drive the reference's own poses cover
 
 
 def check_poses_out(track: PoseTrack, path: Path, overwrite: bool) -> None:
@@ -158,4 +160,5 @@ def drive(
         write_track(driven.to_layout(LAYOUT), poses_path, overwrite=overwrite)  # the network's joints
     width = model.canvas.size * (3 if side_by_side else 1)
     return DriveResult(out, total, driven.fps, (width, model.canvas.size), method, poses_path,
-                       time.perf_counter() - t0, 0.0 if fit is None else fit.share, sound)
+                       time.perf_counter() - t0, 0.0 if fit is None else fit.share, sound,
+                       pose_coverage(driven, model.reference_track))

@@ -86,6 +86,16 @@ METRICS: dict[str, MetricInfo] = {
         "Ankle contact", "share of ankle-frames", None, "share of ankle-frames judged to touch the ground"
     ),
     "outside_share": MetricInfo("Joints outside frame", "share", "lower", "share of joints outside the image"),
+    "novelty_pct": MetricInfo(
+        "Distance to the reference's poses", "% of height", "lower",
+        "distance of each driven pose (relative to the MidHip) to the nearest pose the reference showed in its "
+        "video (clone.drive.coverage): the generator was never shown poses far from all of them",
+    ),
+    "uncovered_share": MetricInfo(
+        "Outside the reference's coverage", "share of frames", "lower",
+        "share of frames whose pose is further from every reference pose than the reference's own poses are "
+        "from each other (clone.drive.coverage): expect holes and smears there",
+    ),
     "stage_share": MetricInfo(
         "Moved onto the stage", "share of frames", None,
         "share of frames whose root or feet lay off the part of the frame the reference used in its video, so "

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from clone.drive.coverage import Coverage, pose_coverage
 from clone.metrics import FrameScorer, Scores, evaluate_track
 from clone.model.canvas import image_to_canvas
 from clone.report.folder import check_report_dir, report_dir
@@ -62,12 +63,14 @@ class ReportRun:
         frames: frames compared.
         summary: method -> its summary numbers.
         seconds: wall time of the run.
+        coverage_line: the retargeted drive's coverage line (:meth:`clone.drive.coverage.Coverage.line`), or None.
     """
 
     page: Path
     frames: int
     summary: dict[str, dict[str, float]]
     seconds: float
+    coverage_line: str | None = None
 
 
 @dataclass
@@ -156,6 +159,7 @@ def _method_results(
     truth: PoseTrack | None,
     kept: _Kept,
     shares: Mapping[str, float],
+    coverage: dict[str, Coverage] | None = None,
 ) -> dict[str, MethodResult]:
     """Every method measured, with its stills and its poses in the stills' (canvas) pixels.
 
@@ -167,9 +171,11 @@ def _method_results(
         kept: the frame scores and stills of the video pass.
         shares: method -> share of frames moved onto the reference's stage (``clone.drive.stage.StageFit.share``);
             methods the stage was not applied to are missing.
+        coverage: receives method -> its pose coverage (:mod:`clone.drive.coverage`).
     """
     at = sorted(kept.at)
     methods = {}
+    coverage = {} if coverage is None else coverage
     for m, detailed in driven.items():
         track = detailed.to_layout(BODY15.name)  # measured and drawn as the network's joints
         scores = evaluate_track(track, *reference, truth)
@@ -177,6 +183,13 @@ def _method_results(
             scores = scores.merged(kept.scorers[m].scores())
         if m in shares:
             scores = scores.merged(Scores(summary={"stage_share": float(shares[m])}))
+        cover = pose_coverage(track, model.reference_track)
+        scores = scores.merged(Scores(
+            per_frame={"novelty_pct": 100.0 * cover.distance.astype(np.float64)},
+            summary={"novelty_pct": 100.0 * float(np.nanmean(cover.distance)) if np.isfinite(cover.distance).any()
+                     else float("nan"), "uncovered_share": cover.share},
+            details={"uncovered_parts": dict(cover.parts)}))
+        coverage[m] = cover
         still_poses = dict(zip(at, image_to_canvas(track.joints[at], model.canvas)))  # t -> [J, 2] canvas px
         label, description = REPORT_METHODS[m]
         methods[m] = MethodResult(label, track, scores, kept.stills[m], still_poses, description)
@@ -280,9 +293,11 @@ def make_report(
     with report_dir(out_dir, overwrite) as folder:
         cut = None if truth_frames is None else cut_gt_frames(truth_frames, gt_frames, total, canvas)
         _write_video(folder / VIDEO, model, driver, driven, cut, kept, device, progress, sound)
-        methods = _method_results(driven, model, reference, truth, kept, shares)
+        coverage: dict[str, Coverage] = {}
+        methods = _method_results(driven, model, reference, truth, kept, shares, coverage)
         gt_info = _ground_truth_info(gt_poses, gt_frames, truth_canvas, kept.gt_stills)
         info = DriverInfo(driver, str(driver_path), str(model_path), _driver_baseline(driver))
         write_report_files(folder, methods, info, gt_info, VIDEO)
     summary = {m: dict(r.scores.summary) for m, r in methods.items()}
-    return ReportRun(out_dir / PAGE, total, summary, time.perf_counter() - t0)
+    line = coverage["retarget"].line() if "retarget" in coverage else None
+    return ReportRun(out_dir / PAGE, total, summary, time.perf_counter() - t0, line)
