@@ -60,10 +60,15 @@ class Frames:
         self.size = size
         self._files = files
         self._count = count
+        # A variable-frame-rate video (a phone's) decodes at its nominal rate, frames repeated where the camera
+        # paused: ``fps`` is that rate and the count is what decoding gives, not the frames stored.
+        self.variable_rate = False
 
     @property
     def num_frames(self) -> int:
         """Number of frames; for a video, counted by decoding it once (cached)."""
+        if self._count is None and self.variable_rate:
+            self._count = sum(1 for _ in self._raw_frames())  # as decoded: at the constant rate of ``fps``
         if self._count is None:
             import imageio_ffmpeg
 
@@ -89,14 +94,38 @@ class Frames:
             )
         return frame
 
-    def _video_frames(self) -> Iterator[np.ndarray]:
-        w, h = self.size
-        gen, _meta = _ffmpeg_reader(self.path)
+    def _raw_frames(self) -> Iterator[bytes]:
+        # Constant rate: every stored frame once, as the count has it (a file cut short included); variable
+        # rate: ffmpeg's constant-rate output at ``fps``.
+        gen, _meta = _ffmpeg_reader(self.path, [] if self.variable_rate else ["-fps_mode", "passthrough"])
         try:
-            for raw in gen:
-                yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()  # [H, W, 3]
+            yield from gen
         finally:
             gen.close()
+
+    def _video_frames(self) -> Iterator[np.ndarray]:
+        w, h = self.size
+        for raw in self._raw_frames():
+            yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()  # [H, W, 3]
+
+
+def _why_unreadable(path: Path, exc: BaseException) -> str:
+    """Why ffmpeg could not open ``path`` as a video, in words: no video stream (a sound file), damaged or cut
+    short, else ffmpeg's own first line."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    try:
+        probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)],
+                               capture_output=True, text=True, errors="replace", timeout=120, check=False).stderr
+    except (OSError, subprocess.TimeoutExpired):
+        return _first_line(exc)
+    if " Audio: " in probe and " Video: " not in probe:
+        return "it has sound but no video stream"
+    if "moov atom not found" in probe or "Invalid data found" in probe or "End of file" in probe:
+        return "damaged or cut short: ffmpeg finds no readable video in it"
+    return _first_line(exc)
 
 
 def _first_line(exc: BaseException) -> str:
@@ -169,7 +198,8 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Frames:
     return _open_video(path, fps)
 
 
-def _ffmpeg_reader(path: Path, attempts: int = 3) -> tuple[Iterator[bytes], dict]:
+def _ffmpeg_reader(path: Path, output_params: list[str] | None = None, attempts: int = 3
+                   ) -> tuple[Iterator[bytes], dict]:
     """imageio-ffmpeg's frame generator and the video's metadata.
 
     imageio-ffmpeg reads the metadata from ffmpeg's log in a thread; on a busy machine a very short video can
@@ -178,7 +208,7 @@ def _ffmpeg_reader(path: Path, attempts: int = 3) -> tuple[Iterator[bytes], dict
     import imageio_ffmpeg
 
     for attempt in range(attempts):
-        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24")
+        gen = imageio_ffmpeg.read_frames(str(path), pix_fmt="rgb24", output_params=output_params)
         try:
             return gen, next(gen)
         except OSError as exc:
@@ -194,7 +224,7 @@ def _open_video(path: Path, fps: float | None) -> Frames:
     except StopIteration:
         raise InputError(f"{path}: video has no frames") from None
     except (OSError, RuntimeError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read as a video ({_first_line(exc)})") from None
+        raise InputError(f"{path}: cannot read as a video ({_why_unreadable(path, exc)})") from None
     try:
         check_image_size(tuple(meta.get("size") or ()), f"{path}: video size")  # before a frame is decoded
     except InputError:
@@ -210,8 +240,46 @@ def _open_video(path: Path, fps: float | None) -> Frames:
         gen.close()
     size = tuple(int(v) for v in meta["size"])
     stored = float(meta.get("fps") or 0.0)
+    nominal = _nominal_rate(path)
+    variable = nominal is not None and MIN_FPS <= nominal <= MAX_FPS and abs(nominal - stored) > 0.01 * nominal
+    if variable:
+        log.info("%s: variable frame rate (%g fps on average); read at its nominal %g fps", path, stored, nominal)
+        stored = float(nominal)
     if not MIN_FPS <= stored <= MAX_FPS:  # none stored, or a broken time base
         if fps is None:
             log.warning("%s: no usable frame rate stored (%g); assuming %g fps", path, stored, DEFAULT_FPS)
         stored = 0.0
-    return Frames(path, "video", fps or (stored if stored > 0 else DEFAULT_FPS), size)  # type: ignore[arg-type]
+    frames = Frames(path, "video", fps or (stored if stored > 0 else DEFAULT_FPS), size)  # type: ignore[arg-type]
+    frames.variable_rate = variable
+    return frames
+
+
+_RATES = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(?:, ([\d.]+) fps)?, ([\d.]+)(k?) tbr")
+
+
+def _nominal_rate(path: Path) -> float | None:
+    """The video stream's nominal rate (ffmpeg's ``tbr``: the rate it decodes at), or None when not stated."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    try:
+        probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)],
+                               capture_output=True, text=True, errors="replace", timeout=120, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    match = _RATES.search(probe.stderr)
+    if match is None:
+        return None
+    return float(match.group(2)) * (1000.0 if match.group(3) else 1.0)
+
+
+class _RotationNotice(logging.Filter):
+    """imageio-ffmpeg warns that a rotated video's frames differ in size from the stored ones: that is the
+    rotation applied as it should be, not news for the user."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "is different from the source frame size" not in record.getMessage()
+
+
+logging.getLogger("imageio_ffmpeg").addFilter(_RotationNotice())

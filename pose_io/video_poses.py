@@ -28,7 +28,10 @@ from pose_io.errors import InputError
 log = logging.getLogger(__name__)
 
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv", ".3gp",
-                  ".ts", ".mts", ".m2ts", ".ogv")
+                  ".ts", ".mts", ".m2ts", ".ogv",
+                  # sound files: read as a video they end in one clear error (no video stream) instead of an
+                  # unknown pose format
+                  ".m4a", ".mp3", ".wav", ".aac", ".flac", ".ogg", ".opus")
 # What goes into every cache key besides the content: bump when extraction changes what it writes.
 EXTRACTOR_VERSION = "mediapipe-pose-0.10.14/1"
 # A track costs 33 x 3 float32 per frame: 43 MB for an hour at 30 fps; 512 MB keeps a dozen such hours.
