@@ -1,10 +1,13 @@
 """A background plate from a static-camera video: per pixel, the median over frames where the person is elsewhere.
 
-The person's region in a frame is estimated from its pose alone: every limb drawn as a thick line, every joint
+The person's region in a frame is estimated from its pose: every limb drawn as a thick line, every joint
 as a disc and the trunk filled, all ``margin`` times the performer's skeleton height wide (joints stop at the
-wrists, ankles and nose; hands, feet, hair and clothes do not). A pixel's plate value is the median over the
-frames where it lies outside that region; a pixel the person covers in every frame falls back to the median
-over all frames (its share is reported: there the plate is only a guess).
+wrists, ankles and nose; hands, feet, hair and clothes do not), joined by the person's own segmented silhouette
+(MediaPipe's selfie segmentation, when installed), which reaches the hair, the dress and the hands. A pixel's plate value is the median over the
+frames where it lies outside that region; a pixel the person covers in every frame is filled in from the free
+pixels around it (OpenCV's Telea inpainting; its share is reported: there the plate is only a guess). The median
+of all frames there, the earlier fallback, is the person herself, who then shows through as a ghost wherever the
+driven pose leaves the spot.
 
 Memory stays bounded whatever the video's length: at most ``max_frames`` evenly spaced frames are used, and the
 median is taken a band of rows at a time. Frames are ``[T, H, W, 3]`` uint8 RGB (an array or a memory map);
@@ -40,10 +43,15 @@ class PlateConfig:
     Attributes:
         max_frames: frames used at most (evenly spaced over the video).
         margin: half-width of the person's region around its skeleton, as a fraction of its skeleton height.
+        segment: add the person's own silhouette (:mod:`pose_io.segment`, MediaPipe's selfie segmentation) to
+            that region: hair, a dress and hands the pose does not reach; without MediaPipe, the pose alone.
+        segment_margin: the silhouette grown by this fraction of the frame's larger side (its edge is soft).
     """
 
     max_frames: int = 150
     margin: float = 0.15
+    segment: bool = True
+    segment_margin: float = 0.02
 
     def __post_init__(self) -> None:
         if self.max_frames < 1:
@@ -60,7 +68,7 @@ class Plate:
         image: [H, W, 3] uint8 RGB.
         free_frames: [H, W] int, frames in which each pixel was free of the person (0: a fallback pixel).
         frames: frames used.
-        fallback_share: share of pixels the person covered in every frame used (plate = median of all frames).
+        fallback_share: share of pixels the person covered in every frame used (inpainted from around them).
     """
 
     image: np.ndarray
@@ -104,6 +112,20 @@ def person_mask(joints: np.ndarray, shape: tuple[int, int], layout: JointLayout,
     if len(trunk) >= 3:
         cv2.fillConvexPoly(mask, cv2.convexHull(pts[trunk]), 1)
     return mask.astype(bool)
+
+
+def _silhouettes(frames: np.ndarray, picks: np.ndarray, margin: float) -> np.ndarray | None:
+    """[N, H, W] bool: the person's segmented silhouette in the picked frames, grown by ``margin`` of the larger
+    side; None without MediaPipe (the pose alone then says where the person is)."""
+    from pose_io.segment import person_masks, segmentation_available
+
+    if not segmentation_available():
+        log.info("background plate: MediaPipe is not installed; the person's region comes from the pose alone")
+        return None
+    masks = person_masks(np.asarray(frames[i]) for i in picks)
+    r = max(1, round(margin * max(masks.shape[1:])))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    return np.stack([cv2.dilate(m.astype(np.uint8), kernel).astype(bool) for m in masks])
 
 
 def _median_band(values: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -170,13 +192,23 @@ def estimate_plate(
     picks = sample_frames(t, config.max_frames)  # [N]
     free = np.stack([~person_mask(joints[i], (h, w), layout, radius) if usable[i] else np.zeros((h, w), bool)
                      for i in picks])  # [N, H, W]
+    if config.segment:
+        silhouettes = _silhouettes(frames, picks, config.segment_margin)
+        if silhouettes is not None:
+            free &= ~silhouettes
     image = np.empty((h, w, 3), dtype=np.uint8)
     count = np.empty((h, w), dtype=np.int64)
     rows = max(1, _BAND_BYTES // max(1, len(picks) * w * 3 * 2))
     for r0 in range(0, h, rows):
         band = np.asarray(frames[picks, r0:r0 + rows])  # [N, R, W, 3]
         image[r0:r0 + rows], count[r0:r0 + rows] = _median_band(band, free[:, r0:r0 + rows])
-    share = float((count == 0).mean())
+    never = count == 0
+    if never.any() and not never.all():
+        # The median of all frames there is the person herself, who would then show through the generator's
+        # alpha as a ghost wherever the driven pose leaves that spot: fill it from the free pixels around it.
+        radius = max(3, round(0.02 * max(h, w)))
+        image = cv2.inpaint(image, never.astype(np.uint8), radius, cv2.INPAINT_TELEA)
+    share = float(never.mean())
     log.debug("background plate from %d frames (person margin %.1f px); %.1f%% of pixels never free",
              len(picks), radius, 100.0 * share)
     return Plate(image=image, free_frames=count, frames=len(picks), fallback_share=share)
