@@ -50,8 +50,9 @@ def _synthetic_video(path: Path, role: str, character: str, yaw: float, frames: 
             video.write(image)
 
 
-def test_video_pipeline(tmp_path):
+def test_video_pipeline(tmp_path, monkeypatch):
     pytest.importorskip("mediapipe")
+    monkeypatch.setenv("CLONE2D_CACHE", str(tmp_path / "cache"))
     _synthetic_video(tmp_path / "ref.mp4", "reference", "tall_long_legs", 15.0, 36)
     _synthetic_video(tmp_path / "drv.mp4", "driver", "short_stocky", -30.0, 24)
     out = tmp_path / "out"
@@ -59,3 +60,26 @@ def test_video_pipeline(tmp_path):
     assert (out / "result.mp4").stat().st_size > 0
     metrics = json.loads((out / "report" / "metrics.json").read_text())
     assert set(metrics["methods"]) >= {"retarget", "global-scale"}
+
+
+def test_real_video(shared_dir, tmp_path, monkeypatch):
+    """examples/real_video.sh on the first seconds of the real videos (cut here with the bundled ffmpeg)."""
+    import subprocess
+
+    monkeypatch.setenv("CLONE2D_CACHE", str(tmp_path / "cache"))
+    import imageio_ffmpeg
+
+    pytest.importorskip("mediapipe")
+    real = tmp_path / "real"
+    real.mkdir()
+    for name, seconds in (("ubc_91BjuE6irxS.mp4", 1.5), ("dance_musepose.mp4", 1.0)):
+        subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(shared_dir / "real" / name), "-t",
+                        str(seconds), "-vf", "scale=-2:480", "-c:v", "libx264", "-c:a", "aac", str(real / name)],
+                       check=True)
+    out = tmp_path / "out"
+    result = run(["bash", str(EXAMPLES / "real_video.sh"), str(real), str(out), "0.05"], tmp_path)
+    assert "with the sound of" in result.stdout + result.stderr
+    for name in ("dance.mp4", "dance_global_scale.mp4", "report/report.html"):
+        assert (out / name).stat().st_size > 0
+    absent = run(["bash", str(EXAMPLES / "real_video.sh"), str(tmp_path / "nowhere"), str(out / "x")], tmp_path)
+    assert absent.stdout.startswith("skipped:")
