@@ -32,6 +32,7 @@ STAGES: dict[str, tuple[str, bool]] = {
     "draw": ("bench.draw", True),
     "generator": ("bench.generator", True),
     "train_quality": ("bench.train_quality", False),
+    "real": ("bench.real", False),
     "drive": ("bench.drive", True),
     "gpu": ("bench.gpu", True),
     "search": ("bench.search", True),
