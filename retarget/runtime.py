@@ -94,6 +94,38 @@ def configure_threads(threads: int | None = None) -> int:
     return n
 
 
+class ThreadGrowth:
+    """For a long CPU run: every ``every_s`` seconds, raise torch's threads to the cores free now, never lower.
+
+    A run's threads are chosen from the free cores at its start, so a moment's load then (an install, a test
+    finishing) would halve a ten-minute run. Call the object once per training step; it samples (a tenth of a
+    second, this process idle meanwhile) only when ``every_s`` have passed. Returns the new count when it grew.
+    """
+
+    def __init__(self, every_s: float = 30.0) -> None:
+        import time
+
+        self.every_s = every_s
+        self._last = time.perf_counter()
+
+    def __call__(self) -> int | None:
+        import time
+
+        import torch
+
+        now = time.perf_counter()
+        if now - self._last < self.every_s:
+            return None
+        free = free_cores()
+        self._last = time.perf_counter()
+        current = torch.get_num_threads()
+        if free <= current:
+            return None
+        torch.set_num_threads(free)
+        log.info("torch threads: %d -> %d (cores came free)", current, free)
+        return free
+
+
 def resolve_device(spec: str = "auto") -> torch.device:
     """``auto`` -> CUDA when available else CPU; ``cpu``; ``cuda`` or ``cuda:N``.
 

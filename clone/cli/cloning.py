@@ -164,6 +164,7 @@ def train_ref(
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
             overwrite=overwrite, align=align.value, weights=weights, progress=update, amp=amp,
+            grow_threads=threads is None,
         )
         main = distributed.current().is_main
     if not main:  # rank 0 reports

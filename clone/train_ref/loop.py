@@ -51,6 +51,7 @@ from clone.train_ref.state import (
 )
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
+from retarget.runtime import ThreadGrowth
 from retarget.training import distributed
 
 if TYPE_CHECKING:
@@ -91,6 +92,7 @@ def train_reference(
     weights: str | os.PathLike | None = None,
     progress: ProgressFn | None = None,
     amp: bool | None = None,
+    grow_threads: bool = False,
 ) -> TrainResult:
     """Train (or continue training) a reference model (in every process of a ``torchrun`` group, if any).
 
@@ -110,6 +112,8 @@ def train_reference(
         weights: retargeting weights for the reference codes (default: the shipped ones, if present).
         progress: called after every step (and every frame read), on rank 0 only.
         amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
+        grow_threads: on the CPU, in one process, raise torch's threads whenever more cores come free
+            (:class:`retarget.runtime.ThreadGrowth`); `clone train-ref` without ``--threads`` sets it.
 
     Returns:
         What was done.
@@ -150,7 +154,8 @@ def train_reference(
             rows = preview_rows(data.indices)
             run.started = time.perf_counter()  # --minutes counts training only
             limit_s = minutes * 60.0 if minutes is not None else None
-            losses, interrupted = _train_steps(run, data, rows, steps, limit_s)
+            grow = ThreadGrowth() if grow_threads and device.type == "cpu" and world.size == 1 else None
+            losses, interrupted = _train_steps(run, data, rows, steps, limit_s, grow)
             if world.is_main:
                 write_png(preview_grid(run.trainer, data, rows), preview_path(out))
             run.save()
@@ -224,7 +229,8 @@ def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel |
 
 
 def _train_steps(
-    run: TrainingRun, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None
+    run: TrainingRun, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None,
+    grow: ThreadGrowth | None = None,
 ) -> tuple[dict[str, float], bool]:
     """Step until ``steps`` in total or ``limit_s`` seconds; returns ``(last losses, interrupted)``.
 
@@ -243,6 +249,8 @@ def _train_steps(
     try:
         while (steps is None or trainer.step_count < steps) and not stop:
             losses = _one_step(run, data)
+            if grow is not None:
+                grow()
             save_due = world.is_main and time.perf_counter() - last_save > config.save_every_s
             losses, (stop, save_due) = distributed.reduce_logs(losses, samples, [time_up(), save_due])
             if trainer.step_count % config.preview_every == 0 and world.is_main:

@@ -115,3 +115,22 @@ def test_resolve_device(monkeypatch):
     monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
     assert resolve_device("auto") == torch.device("cuda")
     assert resolve_device("cuda:1") == torch.device("cuda", 1)
+
+
+def test_thread_growth_raises_threads_when_cores_come_free_and_never_lowers(monkeypatch):
+    import torch
+
+    from retarget import runtime
+
+    before = torch.get_num_threads()
+    try:
+        torch.set_num_threads(1)
+        free = iter([2, 1])
+        monkeypatch.setattr(runtime, "free_cores", lambda: next(free))
+        grow = runtime.ThreadGrowth(every_s=0.0)
+        assert grow() == 2 and torch.get_num_threads() == 2  # a core came free
+        assert grow() is None and torch.get_num_threads() == 2  # busy again: kept
+        waiting = runtime.ThreadGrowth(every_s=3600.0)
+        assert waiting() is None  # not due: nothing sampled (the iterator is spent)
+    finally:
+        torch.set_num_threads(before)
