@@ -8,7 +8,9 @@ drive` does it) and compared with the real frames cut to the model's canvas:
 - SSIM / PSNR of the whole canvas, of the person's box (the pose's box and 15 % around it) and SSIM of the face's
   box (around the nose, eyes, ears and mouth, a sixth of the body's height across);
 - flicker: the mean absolute change between consecutive frames inside the person's box, generated against the
-  real video's own (1.0: as steady as the real footage).
+  real video's own (1.0: as steady as the real footage);
+- pose consistency when the real dancer (``dance_musepose.mp4``) drives the model, retargeted and by global
+  scaling: MediaPipe on the generated frames against the driven poses, PCK@0.1 and median error.
 
 Baseline: the same measures for the model's background plate alone (no person), against the same frames.
 ``run(strips=DIR)`` also writes real | generated strips of held-out frames into DIR, to look at (they show the
@@ -116,6 +118,23 @@ def measure(model_path: Path, track, video: Path, start: int, strip: Path | None
     return out
 
 
+def drive_consistency(model_path: Path, driver_video: Path, method: str) -> dict[str, float]:
+    """The real dancer drives the model (`clone drive`'s poses, ``method``); MediaPipe on the generated frames
+    against the driven poses (:func:`clone.metrics.consistency.pose_consistency`)."""
+    from clone.drive.poses import drive_poses, read_driver
+    from clone.metrics.consistency import pose_consistency
+    from clone.model.canvas import image_to_canvas
+    from clone.model.reference import load_reference_model
+    from clone.runtime.generate import generate_frames
+
+    model = load_reference_model(model_path)
+    driver = read_driver(driver_video, 5, layout=model.pose_layout)
+    driven, _ = drive_poses(driver, model, method, None, "cpu", "reference", True, None)
+    frames = [frame for _map, frame in generate_frames(model, driven, "cpu")]
+    body = image_to_canvas(driven.to_layout("body15").joints, model.canvas)
+    return pose_consistency(frames, body, driven.fps)
+
+
 def run(quick: bool = False, minutes: float | None = None, strips: Path | None = None, **_: object
         ) -> dict[str, Any]:
     import torch
@@ -144,6 +163,11 @@ def run(quick: bool = False, minutes: float | None = None, strips: Path | None =
             seconds = time.perf_counter() - t0
             scores = measure(model, track, video, start,
                              None if strips is None else Path(strips) / f"real_{video.stem}.png")
+            dancer = SHARED_REAL / "dance_musepose.mp4"
+            if dancer.is_file():
+                for method in ("retarget", "global-scale"):
+                    for key, value in drive_consistency(model, dancer, method).items():
+                        scores[f"dancer_{method}_{key}"] = value
             rows.append(row(
                 f"real reference {video.name}: last {HELD_OUT:.0%} of frames held out, {SIZE}² canvas",
                 f"{budget:g} min of train-ref", scores["person_ssim"], "person box SSIM",
