@@ -26,6 +26,17 @@ def shared_dir() -> Path:
     return SHARED
 
 
+@pytest.fixture(autouse=True)
+def _no_int8_prepare(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`clone train-ref` quantises its new generator for `clone drive` (2-3 s even at 32²); the suite trains
+    dozens of tiny models in-process, so only tests marked ``prepare_drive`` run that step."""
+    if request.node.get_closest_marker("prepare_drive"):
+        return
+    from clone.cli import cloning
+
+    monkeypatch.setattr(cloning, "_prepare_drive", lambda model_path: None)
+
+
 @pytest.fixture
 def walking_track() -> PoseTrack:
     """A 40-frame body25 track of a figure whose arms and legs swing, at 30 fps in a 640x480 frame."""

@@ -246,6 +246,7 @@ def test_a_generator_without_previous_frame_or_plate_quantises_too(model, tmp_pa
     assert np.abs(int8(pose).numpy() - expected.numpy()).mean() < 0.05
 
 
+@pytest.mark.prepare_drive
 def test_train_ref_leaves_the_int8_generator_in_the_cache(tmp_path):
     pytest.importorskip("onnxruntime")
     from clone.model.reference import load_reference_model
