@@ -27,12 +27,10 @@ def _ffmpeg() -> str:
 
 def has_audio(path: str | os.PathLike) -> bool:
     """Whether ffmpeg finds an audio stream in ``path`` (False for files it cannot read at all)."""
+    from pose_io.video import ffmpeg_probe
+
     path = Path(path)
-    if not path.is_file():
-        return False
-    probe = subprocess.run([_ffmpeg(), "-hide_banner", "-nostdin", "-i", str(path)], capture_output=True,
-                           text=True, errors="replace", timeout=120, check=False)
-    return bool(_AUDIO_STREAM.search(probe.stderr))
+    return path.is_file() and bool(_AUDIO_STREAM.search(ffmpeg_probe(path) or ""))
 
 
 def resolve_audio(audio: str | os.PathLike | None, driver: str | os.PathLike) -> Path | None:

@@ -109,17 +109,24 @@ class Frames:
             yield np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3).copy()  # [H, W, 3]
 
 
-def _why_unreadable(path: Path, exc: BaseException) -> str:
-    """Why ffmpeg could not open ``path`` as a video, in words: no video stream (a sound file), damaged or cut
-    short, else ffmpeg's own first line."""
+def ffmpeg_probe(path: str | os.PathLike) -> str | None:
+    """What the bundled ffmpeg says of ``path``'s streams (its ``-i`` report), or None when it cannot run."""
     import subprocess
 
     import imageio_ffmpeg
 
     try:
-        probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)],
-                               capture_output=True, text=True, errors="replace", timeout=120, check=False).stderr
+        return subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)],
+                              capture_output=True, text=True, errors="replace", timeout=120, check=False).stderr
     except (OSError, subprocess.TimeoutExpired):
+        return None
+
+
+def _why_unreadable(path: Path, exc: BaseException) -> str:
+    """Why ffmpeg could not open ``path`` as a video, in words: no video stream (a sound file), damaged or cut
+    short, else ffmpeg's own first line."""
+    probe = ffmpeg_probe(path)
+    if probe is None:
         return _first_line(exc)
     if " Audio: " in probe and " Video: " not in probe:
         return "it has sound but no video stream"
@@ -259,16 +266,7 @@ _RATES = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(?:, ([\d.]+) fps)?, ([\d.]+
 
 def _nominal_rate(path: Path) -> float | None:
     """The video stream's nominal rate (ffmpeg's ``tbr``: the rate it decodes at), or None when not stated."""
-    import subprocess
-
-    import imageio_ffmpeg
-
-    try:
-        probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)],
-                               capture_output=True, text=True, errors="replace", timeout=120, check=False)
-    except (OSError, subprocess.TimeoutExpired):
-        return None
-    match = _RATES.search(probe.stderr)
+    match = _RATES.search(ffmpeg_probe(path) or "")
     if match is None:
         return None
     return float(match.group(2)) * (1000.0 if match.group(3) else 1.0)
