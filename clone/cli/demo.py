@@ -52,7 +52,8 @@ def demo_command(
         config = dataclasses.replace(config, minutes=minutes)
     start = time.perf_counter()
     result = run_demo(out, config, device=str(torch_device), weights=weights,
-                      stage=lambda text: console.print(f"[bold]clone demo[/bold]: {text}"))
+                      stage=lambda text: console.print(f"[bold]clone demo[/bold]: {text}"),
+                      grow_threads=threads is None)
     total = time.perf_counter() - start
     stages = ", ".join(f"{k} {v:.0f} s" for k, v in result.seconds.items())
     console.print(f"done in {total:.0f} s ({stages}; {result.steps} training steps)")

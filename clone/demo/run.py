@@ -62,6 +62,7 @@ def run_demo(
     device: str = "cpu",
     weights: str | os.PathLike | None = None,
     stage: StageFn | None = None,
+    grow_threads: bool = False,
 ) -> DemoResult:
     """Render the scenes, train the reference model, report every pair and write the overview.
 
@@ -71,6 +72,8 @@ def run_demo(
         device: torch device for training and driving.
         weights: retargeting weights (default: the ones shipped in the package).
         stage: called with a short description as each stage starts.
+        grow_threads: raise torch's threads while training when cores come free (`clone demo` without
+            ``--threads``; see :func:`clone.train_ref.train_reference`).
 
     Returns:
         Where everything went, stage times in seconds and every pair's summary.
@@ -86,7 +89,7 @@ def run_demo(
     old = prepare_out(out)
     ok = False
     try:
-        result = _run(out, config, device, weights, say)
+        result = _run(out, config, device, weights, say, grow_threads)
         ok = True
     finally:
         finish_out(out, old, ok)
@@ -94,7 +97,7 @@ def run_demo(
 
 
 def _run(out: Path, config: DemoConfig, device: str, weights: str | os.PathLike | None,
-         say: StageFn) -> DemoResult:  # fmt: skip
+         say: StageFn, grow_threads: bool = False) -> DemoResult:  # fmt: skip
     """The demo's stages into the prepared folder ``out``."""
     from clone.demo.page import write_demo_page  # the report and training packages load only when a demo runs
     from clone.report import make_report
@@ -111,7 +114,7 @@ def _run(out: Path, config: DemoConfig, device: str, weights: str | os.PathLike 
     trained = train_reference(
         out / "reference" / "poses.npz", out / "reference" / "frames", model,
         config=TrainConfig(size=config.model_size, seed=config.seed),
-        minutes=config.minutes, device=device, weights=weights,
+        minutes=config.minutes, device=device, weights=weights, grow_threads=grow_threads,
     )  # fmt: skip
     seconds["train"] = time.perf_counter() - start
 
