@@ -77,7 +77,7 @@ def test_real_video(shared_dir, tmp_path, monkeypatch):
                         str(seconds), "-vf", "scale=-2:480", "-c:v", "libx264", "-c:a", "aac", str(real / name)],
                        check=True)
     out = tmp_path / "out"
-    result = run(["bash", str(EXAMPLES / "real_video.sh"), str(real), str(out), "0.05"], tmp_path)
+    result = run(["bash", str(EXAMPLES / "real_video.sh"), str(real), str(out), "0.05", "64"], tmp_path)
     assert "with the sound of" in result.stdout + result.stderr
     for name in ("dance.mp4", "dance_global_scale.mp4", "report/report.html"):
         assert (out / name).stat().st_size > 0
