@@ -35,6 +35,14 @@ def write_person_video(path: Path, frames: int, fps: float = 12.0, audio: Path |
     return path
 
 
+def write_grey_video(path: Path, frames: int = 2, fps: float = 10.0) -> Path:
+    """``frames`` flat grey 64x64 frames: a video with nobody in it."""
+    with VideoWriter(path, fps=fps) as video:
+        for _ in range(frames):
+            video.write(np.full((64, 64, 3), 128, np.uint8))
+    return path
+
+
 def media_info(path: Path) -> tuple[bool, float]:
     """(has an audio stream, the file's duration in seconds) as ffmpeg reads them."""
     import re

@@ -7,6 +7,7 @@ from pose_io import InputError, read_track
 from pose_io.extract import INSTALL_HINT, extract_video, load_mediapipe_pose
 from pose_io.video import read_frames
 from pose_io.video_out import VideoWriter
+from tests.pose_io.media import write_grey_video
 
 
 def mediapipe_available() -> bool:
@@ -51,10 +52,7 @@ def test_extract_finds_the_astronaut(astronaut_video, tmp_path):
 
 @pytest.mark.skipif(not mediapipe_available(), reason="mediapipe is not installed")
 def test_no_person_writes_nothing(tmp_path):
-    path = tmp_path / "grey.mp4"
-    with VideoWriter(path, fps=10) as video:
-        for _ in range(2):
-            video.write(np.full((64, 64, 3), 128, np.uint8))
+    path = write_grey_video(tmp_path / "grey.mp4")
     with pytest.raises(InputError, match="no person in any of 2 frames"):
         extract_video(path, tmp_path / "out")
     assert not (tmp_path / "out").exists()

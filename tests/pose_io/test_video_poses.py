@@ -1,14 +1,12 @@
 import shutil
 
-import numpy as np
 import pytest
 
 from pose_io import extract
 from pose_io.errors import InputError
 from pose_io.readers import detect_format, read_track
-from pose_io.video_out import VideoWriter
 from pose_io.video_poses import is_video, pose_cache_dir, video_track_path
-from tests.pose_io.media import write_person_video
+from tests.pose_io.media import write_grey_video, write_person_video
 
 pytest.importorskip("mediapipe")
 
@@ -45,10 +43,7 @@ def test_a_damaged_cache_entry_is_extracted_again(tmp_path):
 
 
 def test_a_video_with_nobody_is_one_error_and_caches_nothing(tmp_path):
-    video = tmp_path / "grey.mp4"
-    with VideoWriter(video, fps=10) as out:
-        for _ in range(2):
-            out.write(np.full((64, 64, 3), 128, np.uint8))
+    video = write_grey_video(tmp_path / "grey.mp4")
     with pytest.raises(InputError, match="no person in any of 2 frames"):
         read_track(video)
     assert not list(pose_cache_dir().glob("*"))

@@ -33,15 +33,6 @@ from tests.clone.train_ref.helpers import (  # noqa: F401 (_restore_threads is a
 
 
 @pytest.fixture
-def trained(tmp_path: Path) -> Path:
-    poses, frames = write_reference(tmp_path / "ref", figure_track(24))
-    out = tmp_path / "ref.pt"
-    result = CliRunner().invoke(app, train_args(poses, frames, out))
-    assert result.exit_code == 0, result.output
-    return out
-
-
-@pytest.fixture
 def driver(tmp_path: Path) -> Path:
     """A smaller figure in a bigger frame, 30 frames at 12 fps."""
     return write_track(figure_track(30, width=160, height=120, scale=0.7, phase=5.0, fps=12.0), tmp_path / "drv")

@@ -22,15 +22,6 @@ from tests.pose_io.media import media_info, write_person_video, write_tone
 pytest.importorskip("mediapipe")
 
 
-@pytest.fixture
-def trained(tmp_path: Path) -> Path:
-    poses, frames = write_reference(tmp_path / "ref", figure_track(24))
-    out = tmp_path / "ref.pt"
-    result = CliRunner().invoke(app, train_args(poses, frames, out))
-    assert result.exit_code == 0, result.output
-    return out
-
-
 @pytest.fixture(autouse=True)
 def _cache_in_tmp(tmp_path, monkeypatch):
     monkeypatch.setenv("CLONE2D_CACHE", str(tmp_path / "cache"))
