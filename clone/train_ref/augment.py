@@ -33,7 +33,8 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     """Warp pose maps, frames and the background plate (when the sample has one) with the same [B, 2, 3]
     matrices (kornia): the plate stays the background of the warped frames.
 
-    Pose maps are padded with black (-1), frames and plate by repeating their border.
+    Pose maps (and the face mask, when there is one) are padded with black (-1; 0), frames and plate by repeating
+    their border.
     """
     from kornia.geometry.transform import warp_affine
 
@@ -49,6 +50,8 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     for i, name in enumerate(names):
         out[name] = frames[:, 3 * i:3 * i + 3]
     out["frame_prev"] = torch.where(sample["has_prev"].to(m.device)[:, None, None, None], out["frame_prev"], 0.0)
+    if "face" in sample:
+        out["face"] = warp_affine(sample["face"], m, (size, size), padding_mode="zeros", align_corners=True)
     return out
 
 

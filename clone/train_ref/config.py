@@ -32,11 +32,27 @@ class AugmentConfig:
 
 @dataclass(frozen=True)
 class LossConfig:
-    """Loss weights: pix2pix's L1 weight, pix2pixHD's feature-matching weight, GAN weight 1."""
+    """Loss weights: pix2pix's L1 weight, pix2pixHD's feature-matching weight, GAN weight 1, and the terms of
+    :mod:`clone.train_ref.losses`.
+
+    Attributes:
+        l1: weight of the per-pixel L1 to the real frame.
+        gan: weight of the least-squares GAN loss.
+        feature_matching: weight of pix2pixHD's feature matching on D's activations.
+        person: extra weight of the person's pixels in every reconstruction term (0: all pixels alike).
+        face: extra weight of the face's pixels (a disc around the face points of body31 maps) on top of the
+            person's.
+        ssim: weight of ``1 - SSIM`` to the real frame.
+        laplacian: weight of the L1 between Laplacian pyramids.
+    """
 
     l1: float = 100.0
     gan: float = 1.0
     feature_matching: float = 10.0
+    person: float = 0.0
+    face: float = 0.0
+    ssim: float = 0.0
+    laplacian: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from clone.model.networks import (
     generator_input,
     lsgan_loss,
 )
+from clone.train_ref import losses
 from clone.train_ref.augment import degrade_previous
 from clone.train_ref.config import TrainConfig
 from retarget.training import distributed
@@ -132,10 +133,23 @@ class Trainer:
             fake_feats = self.d(discriminator_input(*fake_pair, fake))
             with torch.no_grad():
                 real_feats = self.d(real_in)
-            l1 = F.l1_loss(fake, real)
             gan = lsgan_loss(fake_feats[-1].float(), True)
             fm = feature_matching_loss([f.float() for f in fake_feats], [f.float() for f in real_feats])
-            loss_g = w.l1 * l1 + w.gan * gan + w.feature_matching * fm
+        # The reconstruction terms in float32: SSIM's variances and the pyramid's fine bands are small differences.
+        if w.person or w.face or w.ssim or w.laplacian:
+            weights = losses.person_weights(real, sample.get("plate"), sample["pose_cur"], w.person,
+                                            sample.get("face"), w.face)
+            l1 = losses.weighted_l1(fake, real, weights)
+        else:
+            weights, l1 = None, F.l1_loss(fake, real)
+        loss_g = w.l1 * l1 + w.gan * gan + w.feature_matching * fm
+        terms = {}
+        if w.ssim:
+            terms["ssim"] = losses.ssim_loss(fake, real, weights)
+            loss_g = loss_g + w.ssim * terms["ssim"]
+        if w.laplacian:
+            terms["laplacian"] = losses.laplacian_loss(fake, real, weights)
+            loss_g = loss_g + w.laplacian * terms["laplacian"]
         self.opt_g.zero_grad(set_to_none=True)
         (loss_g if weight == 1.0 else weight * loss_g).backward()
         self.opt_g.step()
@@ -149,7 +163,8 @@ class Trainer:
         (loss_d if weight == 1.0 else weight * loss_d).backward()
         self.opt_d.step()
         self.step_count += 1
-        return {"l1": l1.item(), "gan": gan.item(), "fm": fm.item(), "d": loss_d.item()}
+        return {"l1": l1.item(), "gan": gan.item(), "fm": fm.item(), "d": loss_d.item(),
+                **{k: v.item() for k, v in terms.items()}}
 
     def state_dict(self) -> dict[str, Any]:
         """What resuming needs besides G's weights: D, both optimisers and the step."""
