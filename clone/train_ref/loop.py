@@ -111,7 +111,8 @@ def train_reference(
         align: ``exact`` or ``trim`` (see :func:`read_reference`).
         weights: retargeting weights for the reference codes (default: the shipped ones, if present).
         progress: called after every step (and every frame read), on rank 0 only.
-        amp: bfloat16 autocast on CUDA (None: where the GPU supports it); ignored on the CPU.
+        amp: bfloat16 autocast (None: on CUDA where the GPU supports it; on the CPU only when True, where it
+            has bfloat16 instructions).
         grow_threads: on the CPU, in one process, raise torch's threads whenever more cores come free
             (:class:`retarget.runtime.ThreadGrowth`); `clone train-ref` without ``--threads`` sets it.
 
@@ -141,7 +142,7 @@ def train_reference(
         reference = replace(reference, details=detailed)
     device = torch.device(device)
     run = start_run(out, reference, config, device=device, previous=previous, progress=progress, world=world,
-                    part=part, dtype=distributed.amp_dtype(device, amp))
+                    part=part, dtype=distributed.amp_dtype(device, amp, cpu=True))
     start_step = run.trainer.step_count
 
     # A run that fails (or is terminated) leaves no preview of a model it did not write.

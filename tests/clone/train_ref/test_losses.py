@@ -1,5 +1,5 @@
 """train_ref.losses: weights on the person and the face, SSIM and Laplacian-pyramid terms; the face mask of
-the data."""
+the data; bfloat16 on the CPU."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from clone.train_ref import LossConfig, TrainConfig, Trainer, losses
 from clone.train_ref.augment import warp_batch
 from clone.train_ref.data import ReferenceData, face_mask, face_radius
 from pose_io.layouts import get_layout
+from retarget.training import distributed
 
 
 def _images(seed: int = 0, size: int = 32) -> torch.Tensor:
@@ -92,3 +93,14 @@ def test_a_step_with_every_term_reports_them_and_lowers_the_weighted_l1():
     for _ in range(4):
         last = trainer.train_step(batch, batch["frame_prev"])
     assert last["l1"] < first["l1"] and last["ssim"] < first["ssim"]
+
+
+def test_bfloat16_on_the_cpu_only_where_it_has_the_instructions(monkeypatch):
+    cpu = torch.device("cpu")
+    monkeypatch.setattr(distributed, "cpu_has_bf16", lambda: True)
+    assert distributed.amp_dtype(cpu, True, cpu=True) is torch.bfloat16
+    assert distributed.amp_dtype(cpu, None, cpu=True) is None  # opt-in on the CPU
+    assert distributed.amp_dtype(cpu, False, cpu=True) is None
+    assert distributed.amp_dtype(cpu, True) is None  # callers that never train the CPU in bfloat16
+    monkeypatch.setattr(distributed, "cpu_has_bf16", lambda: False)
+    assert distributed.amp_dtype(cpu, True, cpu=True) is None
