@@ -75,7 +75,7 @@ def measure(model_path: Path, track, video: Path, start: int, strip: Path | None
     layout = driven.joint_layout
     body = canvas_joints[:, : 15]
     height = skeleton_height(body, "body15")
-    truths = [cut_frame(f, model.canvas) for t, f in enumerate(read_frames(video)) if t >= start]
+    truths = [cut_frame(f, model.canvas) for t, f in enumerate(read_frames(video)) if start <= t < track.num_frames]
     preds = [frame for _map, frame in generate_frames(model, driven, "cpu")]
     plate = model.plate
     rows: dict[str, list[float]] = {k: [] for k in ("ssim", "psnr", "person_ssim", "person_psnr", "face_ssim",
