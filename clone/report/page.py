@@ -122,10 +122,29 @@ def _compared_section(methods: Mapping[str, MethodResult], driver: DriverInfo, g
     return f"<section><h2>What was compared</h2><dl>\n{items}\n</dl></section>"
 
 
+def _coverage_note(methods: Mapping[str, MethodResult]) -> str:
+    """One paragraph naming, per method, the share of frames outside the reference's poses and what is new there
+    (the line `clone drive` prints, :meth:`clone.drive.coverage.Coverage.line`); empty when every frame is covered."""
+    items = []
+    for m in methods.values():
+        share = m.scores.summary.get("uncovered_share", 0.0)
+        if not share or not share > 0:
+            continue
+        parts = m.scores.details.get("uncovered_parts", {})
+        named = ", ".join(f"{name} {100 * v:.0f}%" for name, v in dict(parts).items() if v >= 0.005)
+        items.append(f"{escape(m.label)}: {100 * share:.0f}% of the frames" + (f" ({escape(named)})" if named else ""))
+    if not items:
+        return ""
+    return ('<p class="note"><b>Poses the reference never showed.</b> ' + "; ".join(items)
+            + ". Expect holes and smears there: the generator learnt this person only in the poses of the "
+            "reference video (the README's \u201cFilming a good reference\u201d says what to film).</p>")
+
+
 def _summary_section(methods: Mapping[str, MethodResult], driver: DriverInfo) -> str:
     return "\n".join([
         "<section><h2>Summary</h2>",
         _summary_table(methods, driver, method_colors(methods)),
+        _coverage_note(methods),
         _limb_table(methods),
         (
             '<p class="note">The better value of each measure is highlighted. Lengths are in % of the '

@@ -31,6 +31,14 @@ def test_page_without_video_plots_or_truth():
     assert "<title>clone2d report: poses.npz on ref_model.pt</title>" in page
     assert "Driver (input)" in page and '<td class="base">500.0</td>' in page  # pose MSE shown ×1000
 
+    assert "never showed" not in page  # no coverage measured: no note
+
+    covered = methods["retarget"].scores.merged(Scores(
+        summary={"uncovered_share": 0.25}, details={"uncovered_parts": {"arms above the head": 0.2, "legs": 0.001}}))
+    methods["retarget"] = MethodResult("<b>Ret</b>", methods["retarget"].poses, covered)
+    page = render_page(methods, info, None, None, [], False, False)
+    assert "&lt;b&gt;Ret&lt;/b&gt;: 25% of the frames (arms above the head 20%)" in page and "legs 0%" not in page
+
     stills = [(3, "still_00003.png")]
     page = render_page(methods, info, None, "v.mp4", stills, True, False)
     assert 'src="v.mp4"' in page and 'src="curves.png"' in page and 'src="summary.png"' not in page
