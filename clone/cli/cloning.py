@@ -66,6 +66,10 @@ def train_ref(
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue training the model at --out from the training state stored in it.")] = False,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing model at --out.")] = False,
+    init: Annotated[str | None, typer.Option(
+        "--init", help="Start the new model from the generator (and discriminator) of this model file, trained "
+        "on anyone with the same --size and options, instead of random weights; none: random weights "
+        "(default).")] = None,
     align: Annotated[Align, typer.Option(
         "--align", parser=Align, help="exact: frame and pose counts must agree; trim: use the common prefix.")
     ] = Align.EXACT,
@@ -118,7 +122,10 @@ def train_ref(
         if not is_video(ref_poses):
             raise InputError(f"FRAMES: needed when REF_POSES is not a video ({ref_poses})")
         frames = ref_poses
-    for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights)):
+    init_path = None if init is None or init.lower() == "none" else Path(init)
+    if init_path is not None and resume:
+        raise InputError("--init starts a new model; --resume continues one: pass only one of them")
+    for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights), ("--init", init_path)):
         if path is not None and not path.exists():
             raise InputError(f"{name} {path}: no such file or folder")
     dev = training_device(device, threads)
@@ -164,7 +171,7 @@ def train_ref(
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,
             overwrite=overwrite, align=align.value, weights=weights, progress=update, amp=amp,
-            grow_threads=threads is None,
+            grow_threads=threads is None, init=init_path,
         )
         main = distributed.current().is_main
     if not main:  # rank 0 reports

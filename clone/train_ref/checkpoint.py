@@ -161,6 +161,32 @@ def restore(trainer: Trainer, rng: torch.Generator, model: ReferenceModel, path:
         raise InputError(f"{path}: damaged training state ({first[:120]}); cannot resume") from None
 
 
+def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceModel, dict[str, Any] | None]:
+    """A model to start a new run from (``--init``): its generator, and its discriminator's state when it kept one.
+
+    Its generator must be the one ``config`` trains (same size, width, depth, inputs, pose layout): the
+    weights are copied, not adapted.
+
+    Raises:
+        InputError: no such file, not a readable model, or another architecture.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"--init {path}: no such model")
+    model = load_reference_model(path)
+    want, have = config.generator_config().to_dict(), model.generator_config.to_dict()
+    differ = [f"{k} {have.get(k)} (wanted {v})" for k, v in want.items() if have.get(k) != v]
+    if model.pose_layout != config.pose_layout:
+        differ.append(f"pose layout {model.pose_layout} (wanted {config.pose_layout})")
+    if differ:
+        raise InputError(f"--init {path}: its generator differs from this run's: {', '.join(differ)}; "
+                         "train with the same --size and options, or pass --init none")
+    disc = ((model.training or {}).get("trainer") or {}).get("discriminator")
+    if disc is not None and disc.get("config") != config.discriminator_config().to_dict():
+        disc = None
+    return model, disc
+
+
 def strip_resume_state(model: ReferenceModel) -> ReferenceModel:
     """The model without what only resuming reads (the discriminator, both optimisers, the random state): it
     drives exactly as before and cannot be resumed. The run's record (steps, seconds, device, config) stays."""

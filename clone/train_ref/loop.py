@@ -28,7 +28,7 @@ import torch
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
 from clone.train_ref.augment import random_affines, warp_batch
-from clone.train_ref.checkpoint import ReferenceInfo
+from clone.train_ref.checkpoint import ReferenceInfo, load_init
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import (
     ReferenceData,
@@ -93,6 +93,7 @@ def train_reference(
     progress: ProgressFn | None = None,
     amp: bool | None = None,
     grow_threads: bool = False,
+    init: str | os.PathLike | None = None,
 ) -> TrainResult:
     """Train (or continue training) a reference model (in every process of a ``torchrun`` group, if any).
 
@@ -115,6 +116,8 @@ def train_reference(
             has bfloat16 instructions).
         grow_threads: on the CPU, in one process, raise torch's threads whenever more cores come free
             (:class:`retarget.runtime.ThreadGrowth`); `clone train-ref` without ``--threads`` sets it.
+        init: a new run starts from the generator (and discriminator) of this model instead of random weights;
+            it must have the same architecture (see :func:`clone.train_ref.checkpoint.load_init`).
 
     Returns:
         What was done.
@@ -127,6 +130,9 @@ def train_reference(
     out = Path(out)
     check_options(resume, overwrite, steps, minutes)
     previous, config = previous_and_config(out, config, resume, overwrite)
+    if init is not None and resume:
+        raise InputError("--init starts a new model; --resume continues one: pass only one of them")
+    start = load_init(init, config) if init is not None else None
     world = distributed.current()
     try:
         part = distributed.shard(config.batch_size, world)
@@ -142,7 +148,7 @@ def train_reference(
         reference = replace(reference, details=detailed)
     device = torch.device(device)
     run = start_run(out, reference, config, device=device, previous=previous, progress=progress, world=world,
-                    part=part, dtype=distributed.amp_dtype(device, amp, cpu=True))
+                    part=part, dtype=distributed.amp_dtype(device, amp, cpu=True), init=start)
     start_step = run.trainer.step_count
 
     # A run that fails (or is terminated) leaves no preview of a model it did not write.

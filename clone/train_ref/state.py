@@ -10,6 +10,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import torch
 
@@ -101,7 +102,7 @@ def previous_and_config(
 def start_run(
     out: Path, reference: ReferenceInfo, config: TrainConfig, *, device: torch.device,
     previous: ReferenceModel | None, progress: ProgressFn | None, world: distributed.World, part: slice | None,
-    dtype: torch.dtype | None = None,
+    dtype: torch.dtype | None = None, init: tuple[ReferenceModel, dict[str, Any] | None] | None = None,
 ) -> TrainingRun:
     """Seeded networks and random generator, restored from ``previous`` when resuming.
 
@@ -115,10 +116,15 @@ def start_run(
         world: this process's place in the process group.
         part: this process's samples of each global batch (None: all).
         dtype: autocast dtype, or None.
+        init: a new run's starting networks (:func:`clone.train_ref.checkpoint.load_init`): the model whose
+            generator it copies, and the discriminator state to copy, or None.
     """
     torch.manual_seed(config.seed)
-    generator = previous.build_generator(device).train() if previous is not None else None
+    start = previous if previous is not None else (init[0] if init is not None else None)
+    generator = start.build_generator(device).train() if start is not None else None
     trainer = Trainer(config, device, generator, dtype)
+    if previous is None and init is not None and init[1] is not None:
+        trainer.d.load_state_dict(init[1]["state_dict"])
     rng = torch.Generator().manual_seed(config.seed)
     seconds_before = 0.0
     if previous is not None:

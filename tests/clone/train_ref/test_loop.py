@@ -8,6 +8,7 @@ from typer.testing import CliRunner
 
 from clone.cli.main import app
 from clone.model.reference import FORMAT_VERSION, KIND, load_reference_model, preview_path
+from clone.train_ref import TrainConfig, train_reference
 from tests.clone.train_ref.helpers import one_line_error, train_args
 
 
@@ -86,3 +87,45 @@ def test_progress_goes_to_the_callback(reference, tmp_path):
     assert [p.step for p in reading] == list(range(1, 25)) and reading[-1].total == 24
     assert [p.step for p in training] == [1, 2] and set(training[-1].losses) == {"l1", "gan", "fm", "d"}
     assert result.steps == result.steps_this_run == 2 and not result.interrupted
+
+
+def _distance(a, b) -> float:
+    sa, sb = a.build_generator().state_dict(), b.build_generator().state_dict()
+    return sum(float((sa[k].float() - sb[k].float()).abs().sum()) for k in sa)
+
+
+def test_init_starts_from_another_models_networks(reference, tmp_path):
+    poses, frames = reference
+    first, scratch, started = tmp_path / "first.pt", tmp_path / "scratch.pt", tmp_path / "init.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, first, steps=4)).exit_code == 0
+    # From other random weights (another seed): --init must not be the seed's doing.
+    train_reference(poses, frames, scratch, config=TrainConfig(size=32, seed=1), steps=1, device="cpu")
+    result = CliRunner().invoke(app, train_args(poses, frames, started, "--init", str(first), steps=1))
+    assert result.exit_code == 0, result.output
+    a, b, c = (load_reference_model(p) for p in (first, started, scratch))
+    # One step away from the model it started from, far from a run that started from random weights.
+    assert _distance(b, a) < 0.05 * _distance(c, a)
+    assert b.training["steps"] == 1
+    # `--init none` is random weights, the same as no --init.
+    plain, none = tmp_path / "plain.pt", tmp_path / "none.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, plain, steps=1)).exit_code == 0
+    assert CliRunner().invoke(app, train_args(poses, frames, none, "--init", "none", steps=1)).exit_code == 0
+    assert _distance(load_reference_model(plain), load_reference_model(none)) == 0.0
+
+
+def test_init_refuses_another_architecture_and_resume(reference, tmp_path):
+    poses, frames = reference
+    first = tmp_path / "first.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, first, steps=1)).exit_code == 0
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, tmp_path / "b.pt", "--init", str(first),
+                                                             "--no-details")))
+    assert "--init" in line and "pose layout" in line
+    args = train_args(poses, frames, tmp_path / "c.pt", "--init", str(first))
+    args[args.index("32")] = "64"  # --size 64 against a 32² generator
+    line = one_line_error(CliRunner().invoke(app, args))
+    assert "--init" in line and "differs" in line
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, first, "--init", str(first), "--resume")))
+    assert "--init" in line and "--resume" in line
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, tmp_path / "d.pt", "--init",
+                                                             str(tmp_path / "missing.pt"))))
+    assert "--init" in line
