@@ -1,5 +1,7 @@
 import shutil
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from pose_io import extract
@@ -54,3 +56,38 @@ def test_an_unreadable_video_is_one_error(tmp_path):
     bad.write_bytes(b"\x00\x00\x00\x18ftypmp42" + b"\x00" * 100)
     with pytest.raises(InputError, match="truncated.mp4"):
         read_track(bad)
+
+
+def test_ctrl_c_during_extraction_leaves_no_cache_entry_and_no_temp_file(tmp_path):
+    """A long video interrupted half-way (SIGINT, as Ctrl-C sends it to the foreground process): the command
+    ends without a traceback, and neither the pose cache nor its folder holds anything half-written."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    pytest.importorskip("mediapipe")
+    skimage_data = pytest.importorskip("skimage.data")
+    from pose_io.video_out import VideoWriter
+
+    video = tmp_path / "long.mp4"
+    frame = skimage_data.astronaut()[::2, ::2]  # 256x256, a person
+    with VideoWriter(video, fps=25) as out:
+        for i in range(900):
+            out.write(np.roll(frame, i % 9, axis=1))
+    cache = tmp_path / "cache"
+    env = {**os.environ, "CLONE2D_CACHE": str(cache)}
+    clone = Path(sys.executable).with_name("clone")
+    proc = subprocess.Popen([str(clone), "pose", "info", str(video)], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    # Interrupt once extraction has begun (the start-up, imports and MediaPipe's graph, takes 2-3 s; the
+    # frames at least as long again).
+    time.sleep(4.0)
+    assert proc.poll() is None, "extraction ended before it could be interrupted; make the video longer"
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0
+    assert "Traceback" not in out + err, err
+    left = [p for p in cache.rglob("*") if p.is_file()]
+    assert left == [], left
