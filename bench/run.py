@@ -33,6 +33,7 @@ STAGES: dict[str, tuple[str, bool]] = {
     "generator": ("bench.generator", True),
     "train_quality": ("bench.train_quality", False),
     "real": ("bench.real", False),
+    "extract": ("bench.extract", True),
     "drive": ("bench.drive", True),
     "gpu": ("bench.gpu", True),
     "search": ("bench.search", True),
