@@ -44,6 +44,8 @@ class LossConfig:
             person's.
         ssim: weight of ``1 - SSIM`` to the real frame.
         laplacian: weight of the L1 between Laplacian pyramids.
+        face_gan: weight of a second PatchGAN's loss on face crops (training only; body31 pose maps), with
+            feature matching at ``feature_matching`` times it.
     """
 
     l1: float = 100.0
@@ -53,6 +55,7 @@ class LossConfig:
     face: float = 0.0
     ssim: float = 0.0
     laplacian: float = 0.0
+    face_gan: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,9 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from clone.model.networks import (
+    FRAME_CHANNELS,
+    POSE_CHANNELS,
+    DiscriminatorConfig,
     PatchDiscriminator,
     UNetGenerator,
     build_discriminator,
@@ -62,6 +65,15 @@ class Trainer:
         betas = (config.beta1, 0.999)
         self.opt_g = torch.optim.Adam(self.g.parameters(), lr=config.lr, betas=betas)
         self.opt_d = torch.optim.Adam(self.d.parameters(), lr=config.lr, betas=betas)
+        # Training only: a PatchGAN on face crops (pose map + frame), as Everybody Dance Now's face GAN judges
+        # the face; the generator that drives is unchanged.
+        self.face_d: PatchDiscriminator | None = None
+        if config.loss.face_gan:
+            face_config = DiscriminatorConfig(in_channels=POSE_CHANNELS + FRAME_CHANNELS,
+                                              base_channels=config.disc_channels, num_layers=2)
+            self.face_d = build_discriminator("patch", face_config).to(device).train()
+            self._face_d_step = distributed.wrap(self.face_d, device)
+            self.opt_face_d = torch.optim.Adam(self.face_d.parameters(), lr=config.lr, betas=betas)
         self.step_count = 0
 
     def generate(self, pose: Tensor, prev: Tensor, plate: Tensor | None = None) -> Tensor:
@@ -144,6 +156,23 @@ class Trainer:
             weights, l1 = None, F.l1_loss(fake, real)
         loss_g = w.l1 * l1 + w.gan * gan + w.feature_matching * fm
         terms = {}
+        face = None
+        if self.face_d is not None and "face" in sample:
+            boxes, present = losses.face_boxes(sample["face"])
+            share = present.float() / present.float().sum().clamp(min=1.0)  # [B] mean over samples with a face
+            pose_crop = losses.face_crops(sample["pose_cur"], boxes)
+            real_face = torch.cat([pose_crop, losses.face_crops(real, boxes)], dim=1)  # [B, 6, 64, 64]
+            fake_face = torch.cat([pose_crop, losses.face_crops(fake, boxes)], dim=1)
+            face = (real_face, fake_face, share)
+            self.face_d.requires_grad_(False)
+            fake_feats_face = self.face_d(fake_face)
+            with torch.no_grad():
+                real_feats_face = self.face_d(real_face)
+            per_sample = ((fake_feats_face[-1] - 1.0) ** 2).mean(dim=(1, 2, 3))  # [B]
+            fm_face = torch.stack([(f - r.detach()).abs().mean(dim=(1, 2, 3))
+                                   for f, r in zip(fake_feats_face[:-1], real_feats_face[:-1])]).mean(dim=0)
+            terms["face_gan"] = (share * per_sample).sum()
+            loss_g = loss_g + w.face_gan * (terms["face_gan"] + w.feature_matching * (share * fm_face).sum())
         if w.ssim:
             terms["ssim"] = losses.ssim_loss(fake, real, weights)
             loss_g = loss_g + w.ssim * terms["ssim"]
@@ -162,22 +191,40 @@ class Trainer:
         self.opt_d.zero_grad(set_to_none=True)
         (loss_d if weight == 1.0 else weight * loss_d).backward()
         self.opt_d.step()
+        if face is not None:
+            real_face, fake_face, share = face
+            self.face_d.requires_grad_(True)
+            d_real = ((self._face_d_step(real_face)[-1] - 1.0) ** 2).mean(dim=(1, 2, 3))
+            d_fake = (self._face_d_step(fake_face.detach())[-1] ** 2).mean(dim=(1, 2, 3))
+            loss_face_d = 0.5 * (share * (d_real + d_fake)).sum()
+            self.opt_face_d.zero_grad(set_to_none=True)
+            (loss_face_d if weight == 1.0 else weight * loss_face_d).backward()
+            self.opt_face_d.step()
+            terms["face_d"] = loss_face_d
         self.step_count += 1
         return {"l1": l1.item(), "gan": gan.item(), "fm": fm.item(), "d": loss_d.item(),
                 **{k: v.item() for k, v in terms.items()}}
 
     def state_dict(self) -> dict[str, Any]:
-        """What resuming needs besides G's weights: D, both optimisers and the step."""
-        return {
+        """What resuming needs besides G's weights: D (and the face D), the optimisers and the step."""
+        state = {
             "discriminator": {"name": "patch", "config": self.d.config.to_dict(), "state_dict": self.d.state_dict()},
             "opt_g": self.opt_g.state_dict(),
             "opt_d": self.opt_d.state_dict(),
             "step": self.step_count,
         }
+        if self.face_d is not None:
+            state["face_discriminator"] = {"config": self.face_d.config.to_dict(),
+                                           "state_dict": self.face_d.state_dict(),
+                                           "optimizer": self.opt_face_d.state_dict()}
+        return state
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned (G's weights are restored by building G from them)."""
         self.d.load_state_dict(state["discriminator"]["state_dict"])
+        if self.face_d is not None and "face_discriminator" in state:
+            self.face_d.load_state_dict(state["face_discriminator"]["state_dict"])
+            self.opt_face_d.load_state_dict(state["face_discriminator"]["optimizer"])
         self.opt_g.load_state_dict(state["opt_g"])
         self.opt_d.load_state_dict(state["opt_d"])
         self.step_count = int(state["step"])

@@ -104,3 +104,39 @@ def test_bfloat16_on_the_cpu_only_where_it_has_the_instructions(monkeypatch):
     assert distributed.amp_dtype(cpu, True) is None  # callers that never train the CPU in bfloat16
     monkeypatch.setattr(distributed, "cpu_has_bf16", lambda: False)
     assert distributed.amp_dtype(cpu, True, cpu=True) is None
+
+
+def test_face_boxes_centre_on_the_disc_and_mark_samples_without_a_face():
+    face = torch.zeros(2, 1, 64, 64)
+    yy, xx = torch.meshgrid(torch.arange(64.0), torch.arange(64.0), indexing="ij")
+    face[0, 0] = ((xx - 40) ** 2 + (yy - 20) ** 2 <= 5 ** 2).float()
+    boxes, present = losses.face_boxes(face)
+    assert present.tolist() == [True, False]
+    centre = boxes[0].mean(dim=0)
+    torch.testing.assert_close(centre, torch.tensor([40.0, 20.0]), atol=0.3, rtol=0)
+    side = boxes[0, 1, 0] - boxes[0, 0, 0]
+    assert side == pytest.approx(2 * losses.FACE_CROP_RADII * 5, rel=0.1)
+    crops = losses.face_crops(torch.rand(2, 3, 64, 64), boxes)
+    assert crops.shape == (2, 3, losses.FACE_CROP, losses.FACE_CROP)
+
+
+def test_the_face_discriminator_trains_beside_and_resumes():
+    torch.manual_seed(0)
+    config = TrainConfig(size=32, base_channels=8, disc_channels=8, loss=LossConfig(face_gan=1.0))
+    trainer = Trainer(config, torch.device("cpu"))
+    batch = {k: _images(i) for i, k in enumerate(("pose_prev", "pose_cur", "frame_prev", "frame_cur", "plate"))}
+    batch["face"] = torch.zeros(2, 1, 32, 32)
+    batch["face"][0, :, 4:10, 12:18] = 1.0  # the second sample shows no face
+    before = [p.detach().clone() for p in trainer.face_d.parameters()]
+    first = trainer.train_step(batch, batch["frame_prev"])
+    assert {"face_gan", "face_d"} <= set(first) and np.isfinite(first["face_gan"])
+    assert any(not torch.equal(a, b) for a, b in zip(before, trainer.face_d.parameters()))
+    state = trainer.state_dict()
+    assert "face_discriminator" in state
+    torch.manual_seed(1)
+    again = Trainer(config, torch.device("cpu"))
+    again.g.load_state_dict(trainer.g.state_dict())
+    again.load_state_dict(state)
+    assert trainer.train_step(batch, batch["frame_prev"]) == again.train_step(batch, batch["frame_prev"])
+    # Without the weight there is no face discriminator at all.
+    assert Trainer(TrainConfig(size=32, base_channels=8, disc_channels=8), torch.device("cpu")).face_d is None
