@@ -54,10 +54,12 @@ class ReferenceData:
         size: S.
         plate: [S, S, 3] uint8 RGB background plate, or None (see :func:`reference_plate`).
         layout: the joints' layout (body15, or body31 with the details).
+        face_radius: radius of the face's disc each batch carries as ``face`` (:func:`face_mask`), or None: no
+            face points, or ``faces=False`` (no loss uses it).
     """
 
     def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int,
-                 plate: np.ndarray | None = None, layout: str = LAYOUT) -> None:
+                 plate: np.ndarray | None = None, layout: str = LAYOUT, faces: bool = True) -> None:
         self.frames = frames
         self.joints = joints
         self.usable = usable
@@ -65,7 +67,8 @@ class ReferenceData:
         self.plate = plate
         self.layout = get_layout(layout)
         self.indices = np.flatnonzero(usable)
-        self.face_radius = face_radius(joints, self.layout)
+        # The face's disc only where a loss uses it (it is drawn and warped with every sample).
+        self.face_radius = face_radius(joints, self.layout) if faces else None
 
     def pose_map(self, i: int) -> np.ndarray:
         """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0)."""

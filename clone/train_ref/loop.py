@@ -220,7 +220,9 @@ def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarra
         run.report(StepProgress("reading", i + 1, count, run.elapsed(), None, {}))
     log.info("read %d frames in %.1f s", count, run.elapsed())
     drawn = run.reference.details if run.reference.details is not None else run.reference.track
-    return ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout)
+    loss = run.config.loss
+    return ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout,
+                         faces=bool(loss.face or loss.face_gan))
 
 
 def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel | None) -> None:
