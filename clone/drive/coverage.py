@@ -66,7 +66,7 @@ class Coverage:
         """One line for the user when frames fall outside, else None."""
         if not self.outside.any():
             return None
-        named = ", ".join(f"{name} {100 * share:.0f}%" for name, share in self.parts.items() if share >= 0.005)
+        named = describe_parts(self.parts)
         return (f"coverage: {100 * self.share:.0f}% of the frames ask for poses the reference never showed"
                 + (f" ({named})" if named else "")
                 + "; expect holes and smears there (the README's 'Filming a good reference' says what to film)")
@@ -75,6 +75,11 @@ class Coverage:
         """JSON-ready numbers."""
         return {"outside_share": self.share, "threshold": self.threshold, "parts": dict(self.parts),
                 "median_distance": float(np.nanmedian(self.distance)) if np.isfinite(self.distance).any() else None}
+
+
+def describe_parts(parts: dict[str, float]) -> str:
+    """``"arms 60%, arms above the head 4%"``: what is new in the uncovered frames, shares under 0.5 % left out."""
+    return ", ".join(f"{name} {100 * share:.0f}%" for name, share in parts.items() if share >= 0.005)
 
 
 def _normalised(joints: np.ndarray, height: float) -> np.ndarray:

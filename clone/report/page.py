@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from html import escape
 from pathlib import Path
 
+from clone.drive.coverage import describe_parts
 from clone.metrics import METRICS
 from clone.report.results import (
     CURVES,
@@ -130,8 +131,7 @@ def _coverage_note(methods: Mapping[str, MethodResult]) -> str:
         share = m.scores.summary.get("uncovered_share", 0.0)
         if not share or not share > 0:
             continue
-        parts = m.scores.details.get("uncovered_parts", {})
-        named = ", ".join(f"{name} {100 * v:.0f}%" for name, v in dict(parts).items() if v >= 0.005)
+        named = describe_parts(dict(m.scores.details.get("uncovered_parts", {})))
         items.append(f"{escape(m.label)}: {100 * share:.0f}% of the frames" + (f" ({escape(named)})" if named else ""))
     if not items:
         return ""
