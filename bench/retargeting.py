@@ -102,7 +102,8 @@ def _single_tracks(quick: bool) -> list[dict[str, Any]]:
 
     ours_torch = load_retargeter(PACKAGED_WEIGHTS, device="cpu", config=InferenceConfig(refine_steps=0))
     ours_refined = load_retargeter(PACKAGED_WEIGHTS, device="cpu")  # the default: motion codes refined
-    ours_numpy = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")
+    ours_numpy = load_retargeter(PACKAGED_WEIGHTS, device="cpu", config=InferenceConfig(refine_steps=0), backend="numpy")
+    numpy_refined = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")  # the CLI's default
     source, _ = source_track()
     codes = ours_numpy.reference_codes(tiled(source, 120))
     rows = []
@@ -114,7 +115,9 @@ def _single_tracks(quick: bool) -> list[dict[str, Any]]:
         case = case if frames != 2_000 else "track 2,000 frames (--quick)"
         prepared = ours_numpy.prepare_motion(track, "bench track")
         ours = {
-            "ours, numpy backend: retarget() end to end": lambda t=track: ours_numpy.retarget(t, codes),
+            "ours, numpy backend: retarget() end to end, codes not refined": lambda t=track: ours_numpy.retarget(t, codes),
+            (f"ours, numpy backend: retarget() end to end, motion codes refined ({numpy_refined.config.refine_steps} "
+             "steps, the default)"): lambda t=track: numpy_refined.retarget(t, codes),
             "ours, numpy backend: windows + network + output (track prepared)":
                 lambda p=prepared: ours_numpy.retarget_prepared([p], codes),
         }  # fmt: skip
@@ -159,14 +162,14 @@ def _write_clips(folder: Path, count: int) -> Path:
 
 def _batch(quick: bool) -> list[dict[str, Any]]:
     from pose_io.readers import read_track
-    from retarget.api import PACKAGED_WEIGHTS, load_retargeter
+    from retarget.api import PACKAGED_WEIGHTS, InferenceConfig, load_retargeter
 
     count = 200 if quick else 1_000
     case = f"batch {count:,} clips of 120 frames"
     tmp = Path(tempfile.mkdtemp(prefix="bench_batch_"))
     try:
         clips = _write_clips(tmp, count)
-        ours = load_retargeter(PACKAGED_WEIGHTS, device="cpu", backend="numpy")
+        ours = load_retargeter(PACKAGED_WEIGHTS, device="cpu", config=InferenceConfig(refine_steps=0), backend="numpy")
         tracks = [read_track(p) for p in sorted(clips.iterdir())]
         codes = ours.reference_codes(tracks[0])
         one_by_one = time_call(lambda: [ours.retarget(t, codes) for t in tracks], 2, 1).rate(120 * count)

@@ -10,17 +10,16 @@ the training windows). The output keeps the driver's frame count and fps; its si
 skeleton code, its root trajectory is integrated from the predicted velocity, centred where the reference
 stands and with the feet on the reference's ground line.
 
-The torch backend (:class:`Retargeter`, any device) refines each driver window's motion code with a few
-gradient steps before decoding it (:mod:`retarget.inference.refine`; ``InferenceConfig.refine_steps``), which keeps the
-driver's range of motion. The numpy backend (:class:`NumpyRetargeter`, CPU, no torch import, see
-:mod:`retarget.network.numpy_weights`) runs the network without that refinement, as the torch one does with
-``refine_steps=0``: the fast path for live use (``clone retarget apply --refine-steps 0``). Everything around
+Each driver window's motion code is refined with a few gradient steps before it is decoded
+(``InferenceConfig.refine_steps``), which keeps the driver's range of motion. Both backends do it, with the same
+results up to float32 rounding: torch (:class:`Retargeter`, any device; :mod:`retarget.inference.refine`) and numpy
+(:class:`NumpyRetargeter`, CPU, never imports torch, weights from :mod:`retarget.network.numpy_weights`; the
+decoder's gradient written out, :mod:`retarget.inference.numpy_refine`), the default on a CPU. Everything around
 the network (preparing tracks, windows, placing the result) is the same numpy code for both.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,8 +42,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-# "auto": numpy on the CPU when the weights have an up-to-date export and no motion-code refinement is asked
-# for, else torch.
+# "auto": numpy on the CPU when the weights have an up-to-date export, else torch.
 BACKENDS = ("auto", "numpy", "torch")
 
 __all__ = [
@@ -114,8 +112,8 @@ class Retargeter(RetargeterBase):
 
 @dataclass(eq=False)
 class NumpyRetargeter(RetargeterBase):
-    """:class:`Retargeter` without motion-code refinement, the network evaluated by numpy on the CPU; never imports
-    torch. Its results are those of a :class:`Retargeter` whose ``config.refine_steps`` is 0.
+    """:class:`Retargeter` evaluated by numpy on the CPU, motion-code refinement included; never imports torch. Its
+    results are a :class:`Retargeter`'s with the same config, up to float32 rounding.
 
     Its matrix products run on numpy's BLAS, whose thread count the process owns: on a machine another job
     keeps busy, :func:`retarget.network.blas.set_blas_threads` to the free cores (``clone`` does) is many times faster.
@@ -124,20 +122,22 @@ class NumpyRetargeter(RetargeterBase):
         model: the network (:class:`retarget.network.numpy_net.NumpyRetargetNet`).
         stats: its input statistics.
         preprocess: canvas height and smoothing.
-        config: windowing of long tracks (``refine_steps`` must be 0).
+        config: windowing of long tracks and motion-code refinement.
     """
 
     model: NumpyRetargetNet
     stats: NormStats
     preprocess: PreprocessConfig
-    config: InferenceConfig = field(default_factory=lambda: InferenceConfig(refine_steps=0))
-
-    def __post_init__(self) -> None:
-        if self.config.refine_steps:
-            raise ValueError("the numpy backend does not refine motion codes (refine_steps must be 0)")
+    config: InferenceConfig = field(default_factory=InferenceConfig)
 
     def _run(self, windows: np.ndarray, body: np.ndarray | None, view: np.ndarray | None) -> np.ndarray:
-        return self.model.run(windows, body, view)
+        c = self.config
+        if c.refine_steps == 0:
+            return self.model.run(windows, body, view)
+        from retarget.inference.numpy_refine import decode_refined
+
+        return decode_refined(self.model, np.ascontiguousarray(windows), body, view, c.refine_steps, c.refine_rate,
+                              c.refine_anchor, c.code_window, c.code_stride)  # fmt: skip
 
     def _encode_static(self, windows: np.ndarray, which: str) -> np.ndarray:
         encode = self.model.encode_body if which == "body" else self.model.encode_view
@@ -170,9 +170,8 @@ def load_retargeter(
         device: "auto", "cpu", "cuda" or "cuda:N" (the numpy backend runs on the CPU: "auto" or "cpu").
         config: windowing of long tracks and motion-code refinement (default :class:`InferenceConfig`).
         backend: "torch" (:class:`Retargeter`); "numpy" (:class:`NumpyRetargeter`, needs an up-to-date export
-            beside the checkpoint, or an ``.npz`` as ``weights``; it does not refine motion codes, so it runs
-            with ``config.refine_steps`` 0); "auto": numpy when the device allows it, such an export exists and
-            ``config`` asks for no refinement, else torch.
+            beside the checkpoint, or an ``.npz`` as ``weights``); "auto": numpy when the device allows it and
+            such an export exists, else torch.
 
     Raises:
         InputError: no packaged weights yet, a missing/corrupt/foreign file, an unusable device, or a backend
@@ -191,15 +190,14 @@ def load_retargeter(
     on_cpu = device.strip().lower() in ("auto", "cpu")
     is_export = weights.suffix.lower() == ".npz"
     config = config or InferenceConfig()
-    if backend != "torch" and on_cpu and (backend == "numpy" or is_export or config.refine_steps == 0):
+    if backend != "torch" and on_cpu:
         from retarget.network.numpy_weights import current_export, read_npz
 
         export = read_npz(weights) if is_export else current_export(weights)
         if export is not None:
-            log.info("retargeting with the %s network from %s with numpy on the CPU (motion codes not refined)",
-                     export.variant, export.path)  # fmt: skip
-            return NumpyRetargeter(export.model, export.stats, export.preprocess,
-                                   dataclasses.replace(config, refine_steps=0))  # fmt: skip
+            log.info("retargeting with the %s network from %s with numpy on the CPU (motion codes refined by %d "
+                     "steps)", export.variant, export.path, config.refine_steps)  # fmt: skip
+            return NumpyRetargeter(export.model, export.stats, export.preprocess, config)
         if backend == "numpy":
             raise InputError(
                 f"{weights}: no up-to-date numpy export beside it; write one with `python -m retarget.network.numpy_weights"

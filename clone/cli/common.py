@@ -117,8 +117,7 @@ MAX_REFINE_STEPS = 1000
 RefineStepsOption = Annotated[
     int | None,
     typer.Option("--refine-steps", help="Retargeting: gradient steps that refine each driver window's motion code "
-                 "before it is decoded onto the reference (default: 30; fewer are faster: 5 cost a sixth; 0: the "
-                 "network alone, on numpy when the weights have an export, the fastest)."),
+                 "before it is decoded onto the reference (default: 30; fewer are faster; 0: the network alone)."),
 ]
 
 

@@ -2,8 +2,8 @@
 (`train`, `eval` and `eval-cloning` live in :mod:`clone.cli.retarget_train`, :mod:`clone.cli.retarget_eval` and
 :mod:`clone.cli.retarget_cloning`).
 
-torch and the pose readers are imported inside the commands so that `clone --help` stays fast, and `apply
---refine-steps 0` imports no torch at all when the weights have a numpy export (``--backend auto``).
+torch and the pose readers are imported inside the commands so that `clone --help` stays fast, and `apply`
+imports no torch at all when the weights have a numpy export (``--backend auto``, the shipped weights).
 """
 
 from __future__ import annotations
@@ -60,14 +60,14 @@ def apply(
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     backend: Annotated[
         str, typer.Option("--backend", help="auto | numpy | torch. auto: numpy on the CPU (torch is not even "
-                          "imported) with --refine-steps 0 when the weights have an up-to-date .npz export beside "
-                          "them, else torch. numpy never refines motion codes.")
+                          "imported) when the weights have an up-to-date .npz export beside them (the shipped "
+                          "ones do), else torch. Both refine motion codes, to the same result.")
     ] = "auto",
     refine_steps: Annotated[
         int | None,
         typer.Option("--refine-steps", help="Gradient steps that refine each driver window's motion code so the "
-                     f"driver's range of motion is kept (torch; default {REFINE_STEPS}, chosen on validation). 0: the encoder's "
-                     "code as it is, several times faster, and the numpy backend can run it."),
+                     f"driver's range of motion is kept (default {REFINE_STEPS}, chosen on validation). 0: the "
+                     "encoder's code as it is."),
     ] = None,
     to: Annotated[
         OutputFormat | None,
@@ -88,9 +88,6 @@ def apply(
 
     check_number("--threads", threads, 1, MAX_THREADS)
     check_number("--refine-steps", refine_steps, 0, MAX_REFINE_STEPS)
-    if refine_steps and (backend.strip().lower() == "numpy" or (weights is not None and weights.suffix.lower() == ".npz")):
-        raise InputError("--refine-steps: the numpy backend does not refine motion codes (nor does a numpy export "
-                         "given as --weights); pass 0, or --backend torch with the .pt checkpoint")
     batch = is_batch(motion_poses)
     # Every output is checked before any work: a bad --preview must not fail after --out is written.
     if batch:

@@ -78,12 +78,12 @@ def load_driving_retargeter(
     weights: str | os.PathLike | None, device: str = "cpu", refine_steps: int | None = None
 ):  # -> retarget.api.Retargeter | NumpyRetargeter
     """The retargeting network for driving: ``refine_steps`` motion-code refinement steps (None: inference's
-    default); with 0, the numpy backend when the weights have an up-to-date export (nothing to refine there)."""
+    default); the numpy backend on the CPU when the weights have an up-to-date export (the shipped ones)."""
     from retarget.api import load_retargeter
     from retarget.inference.config import InferenceConfig
 
     config = None if refine_steps is None else InferenceConfig(refine_steps=refine_steps)
-    return load_retargeter(weights, device=device, config=config, backend="auto" if refine_steps == 0 else "torch")
+    return load_retargeter(weights, device=device, config=config, backend="auto")
 
 
 def retarget_onto(

@@ -46,8 +46,8 @@ class InferenceConfig:
         batch: windows of ``window`` frames run through the network at once (``batch * window`` frames per
             pass; short clips of one length are stacked up to that many frames).
         refine_steps: Adam steps that refine each driver window's motion code before it is decoded
-            (:mod:`retarget.inference.refine`; torch backend only). 0 = the encoder's code as it is (the numpy
-            backend, the authors' models).
+            (:mod:`retarget.inference.refine`, :mod:`retarget.inference.numpy_refine`). 0 = the encoder's code
+            as it is (as the authors run their models).
         refine_rate: their learning rate.
         refine_anchor: weight of the pull towards the encoder's code.
         fps: frame rate the network runs at: drivers and references more than ``FPS_TOLERANCE`` off it are

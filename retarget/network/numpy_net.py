@@ -237,6 +237,11 @@ class NumpyRetargetNet:
         self._static_weights = (np.ascontiguousarray(summed[: c.body_dim]), np.ascontiguousarray(summed[c.body_dim :]))
         self.decoder = (_UpConv.build(first_w[:, :motion_dim], first_b),
                         *(_UpConv.build(w, b) for w, b in layers[1:]))  # fmt: skip
+        # for the decoder's backward pass (motion-code refinement): each layer's transposed convolution as a
+        # plain one over the zero-padded output gradient, taps reversed: [K * Cout, Cin]
+        self._transposed = tuple(_im2col_weight(w[:, :motion_dim].transpose(1, 0, 2)[:, :, ::-1]) if i == 0
+                                 else _im2col_weight(w.transpose(1, 0, 2)[:, :, ::-1])
+                                 for i, (w, _) in enumerate(layers))  # fmt: skip
 
     @property
     def variant(self) -> str:
@@ -300,12 +305,39 @@ class NumpyRetargetNet:
                 bias = bias + code.reshape(code.shape[0] if code.ndim > 1 else 1, -1) @ weight  # [B or 1, Cout]
         return bias[:, None, :]  # [B or 1, 1, Cout]
 
-    def _decode(self, m: np.ndarray, first_bias: np.ndarray) -> np.ndarray:
-        """[B, T', Cm] -> [B, 8 T', 30]."""
+    def _decode(self, m: np.ndarray, first_bias: np.ndarray, kept: list[np.ndarray] | None = None) -> np.ndarray:
+        """[B, T', Cm] -> [B, 8 T', 30]; ``kept`` collects what :meth:`decode_backward` needs (each hidden layer's
+        LeakyReLU slope per element)."""
         slope, last = self.config.negative_slope, len(self.decoder) - 1
         x = m
         for i, layer in enumerate(self.decoder):
             x = layer(x, first_bias if i == 0 else None)
             if i < last:
+                if kept is not None:
+                    kept.append(np.where(x > 0, np.float32(1), np.float32(slope)))
                 x = _leaky(x, slope)
         return x
+
+    def decode_backward(self, grad: np.ndarray, kept: list[np.ndarray]) -> np.ndarray:
+        """The gradient of a loss with respect to the motion code [B, T', Cm], from its gradient ``grad`` with
+        respect to the decoder's output [B, 8 T', 30] (channels-last) and the ``kept`` of the forward pass
+        (:meth:`_decode`). The static codes are held fixed.
+
+        Each layer backwards: the transposed convolution (a plain one over the output gradient padded with
+        ``kernel - 1`` zeros, taps reversed), the reflection padding folded back onto the frames it copied, and
+        the two copies of every upsampled frame summed.
+        """
+        kernel = self.config.decoder_kernel
+        pad = (kernel - 1) // 2
+        g = np.asarray(grad, np.float32)
+        for i in range(len(self.decoder) - 1, -1, -1):
+            if i < len(self.decoder) - 1:
+                g = g * kept[i]
+            b, length, c = g.shape
+            zeros = np.zeros((b, kernel - 1, c), np.float32)
+            padded = _conv(np.concatenate([zeros, g, zeros], axis=1), self._transposed[i], None, kernel)  # [B, L + 2 pad, Cin]
+            up = padded[:, pad : pad + length].copy()  # [B, L, Cin]: the upsampled signal's gradient
+            up[:, pad:0:-1] += padded[:, :pad]  # the left padding copied frames pad .. 1
+            up[:, -2 : -pad - 2 : -1] += padded[:, pad + length :]  # the right padding frames L - 2 .. L - 1 - pad
+            g = up[:, 0::2] + up[:, 1::2]  # [B, L / 2, Cin]
+        return g

@@ -21,7 +21,7 @@ pytestmark = pytest.mark.usefixtures("one_thread")
 
 @pytest.fixture(scope="module")
 def backends() -> tuple[Retargeter, NumpyRetargeter]:
-    # long tracks cross several windows; the numpy backend is torch without motion-code refinement
+    # long tracks cross several windows (without refinement: its parity is tested below)
     small = InferenceConfig(window=128, overlap=32, batch=2, refine_steps=0)
     return load_retargeter(config=small), load_retargeter(config=small, backend="numpy")
 
@@ -85,13 +85,23 @@ def test_numpy_backend_modules_import_without_torch():
     assert out.stdout.strip() == "False", out.stderr
 
 
-def test_auto_takes_torch_when_codes_are_refined_and_numpy_never_refines():
+def test_auto_takes_numpy_for_the_default_refined_codes_and_both_backends_agree(people):
     assert InferenceConfig().refine_steps > 0
-    assert isinstance(load_retargeter(backend="auto"), Retargeter)
-    numpy_backend = load_retargeter(backend="numpy")  # asked for by name: it runs without refinement
-    assert isinstance(numpy_backend, NumpyRetargeter) and numpy_backend.config.refine_steps == 0
-    with pytest.raises(ValueError, match="does not refine"):
-        NumpyRetargeter(numpy_backend.model, numpy_backend.stats, numpy_backend.preprocess, InferenceConfig())
+    numpy_backend = load_retargeter(backend="auto")  # the default: refined codes, no torch
+    assert isinstance(numpy_backend, NumpyRetargeter) and numpy_backend.config == InferenceConfig()
+    torch_backend = load_retargeter(backend="torch")
+    # several windows of a long track, a short clip, and a track at another frame rate
+    long = walking_figure(400, seed=3)
+    tracks = [long, people["tall"], walking_figure(90, seed=4, fps=25.0)]
+    small = InferenceConfig(window=128, overlap=32)
+    for config in (InferenceConfig(), small):
+        ours, theirs = (dataclasses.replace(b, config=config) for b in (numpy_backend, torch_backend))
+        reference = theirs.reference_codes(people["small"])
+        for track in tracks:
+            a, b = ours.retarget(track, reference), theirs.retarget(track, reference)
+            assert a.equals(b, atol=PX), np.abs(a.joints - b.joints).max()
+        plain = dataclasses.replace(theirs, config=dataclasses.replace(config, refine_steps=0))
+        assert np.abs(plain.retarget(long, reference).joints - theirs.retarget(long, reference).joints).max() > 0.5
 
 
 def test_clips_at_several_rates_at_once_keep_each_its_frames_and_rate(backends, people):

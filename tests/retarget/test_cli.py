@@ -76,22 +76,24 @@ def test_apply_refine_steps(inputs, tmp_path):
     runner = CliRunner()
     base = ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]), "--size", "720x720",
             "--weights", str(inputs["weights"]), "--device", "cpu"]  # fmt: skip
-    result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--backend", "numpy", "--refine-steps", "3"])
-    assert result.exit_code == 2 and "numpy backend does not refine" in result.output
-    npz = ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]), "--size", "720x720",
-           "--weights", str(inputs["weights"].with_suffix(".npz")), "--refine-steps", "2"]  # fmt: skip
-    result = runner.invoke(app, [*npz, "--out", str(tmp_path / "a")])
-    assert result.exit_code == 2 and "numpy backend does not refine" in result.output
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "a"), "--refine-steps", "-1"])
     assert result.exit_code == 2 and "--refine-steps" in result.output
     assert not (tmp_path / "a").exists()
+    npz = ["retarget", "apply", str(inputs["tall"]), "--skeleton", str(inputs["small"]), "--size", "720x720",
+           "--weights", str(inputs["weights"].with_suffix(".npz")), "--no-foot-lock"]  # fmt: skip
     outs = {}
-    for name, extra in (("plain", ["--refine-steps", "0", "--backend", "numpy"]), ("refined", [])):
-        result = runner.invoke(app, [*base, "--out", str(tmp_path / f"{name}.npz"), "--no-foot-lock", *extra])
+    for name, command in (("plain", [*base, "--refine-steps", "0", "--backend", "numpy"]), ("refined", base),
+                          ("torch refined", [*base, "--backend", "torch", "--refine-steps", "3"]),
+                          ("numpy refined", [*base, "--backend", "numpy", "--refine-steps", "3"]),
+                          ("export refined", [*npz, "--refine-steps", "3"])):  # fmt: skip
+        result = runner.invoke(app, [*command, "--out", str(tmp_path / f"{name}.npz"), "--no-foot-lock"])
         assert result.exit_code == 0, result.output
         outs[name] = read_track(tmp_path / f"{name}.npz").joints
     assert outs["plain"].shape == outs["refined"].shape
     assert abs(outs["plain"] - outs["refined"]).max() > 0.5  # pixels: the refined codes decode other poses
+    # three steps on either backend, or from the export alone: the same poses
+    for name in ("numpy refined", "export refined"):
+        assert abs(outs[name] - outs["torch refined"]).max() < 2e-3, name
 
 
 def test_train_errors_are_one_line(tmp_path):

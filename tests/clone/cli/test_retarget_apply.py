@@ -43,10 +43,11 @@ def _one_error_line(result) -> str:
 
 
 def test_apply_runs_without_importing_torch(clips, tmp_path):
-    """The packaged weights have an up-to-date .npz: apply never imports torch (-X importtime lists every import)."""
+    """The packaged weights have an up-to-date .npz: apply, motion-code refinement included, never imports torch
+    (-X importtime lists every import)."""
     out = tmp_path / "moved.npz"
     cmd = [sys.executable, "-X", "importtime", "-m", "clone", "retarget", "apply", str(clips["walk"]),
-           "--skeleton", str(clips["reference"]), "--out", str(out), "--threads", "1", "--refine-steps", "0"]
+           "--skeleton", str(clips["reference"]), "--out", str(out), "--threads", "1"]
     proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     imported = [line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines() if line.startswith("import time")]
@@ -58,9 +59,9 @@ def test_apply_runs_without_importing_torch(clips, tmp_path):
 
 
 def test_backends_write_the_same_poses(clips, tmp_path):
-    for backend in ("numpy", "torch"):
+    for backend in ("numpy", "torch"):  # motion codes refined by both, as by default
         result = _apply(clips["long"], "--skeleton", clips["reference"], "--out", tmp_path / f"{backend}.npz",
-                        "--backend", backend, "--refine-steps", "0")  # numpy = torch without refinement
+                        "--backend", backend)
         assert result.exit_code == 0, result.output
     assert read_track(tmp_path / "numpy.npz").equals(read_track(tmp_path / "torch.npz"), atol=PX)
 

@@ -57,6 +57,45 @@ def test_every_layer_matches_torch(variant, frames):
     assert net.run(xn, *codes).dtype == np.float32
 
 
+@pytest.mark.parametrize("variant", list(VARIANTS))
+@pytest.mark.parametrize("frames", [16, 40, 120])
+def test_the_decoders_backward_pass_is_torch_autograds(variant, frames):
+    """decode_backward (what numpy refinement steps with) against autograd through the torch decoder, at lengths
+    where the polyphase layers take their plain path (16), the corrected ends (40) and the long middle."""
+    model, net = _pair(variant, seed=frames + 1)
+    if frames < model.min_frames:
+        pytest.skip(f"the {variant} network takes at least {model.min_frames} frames")
+    rng = torch.Generator().manual_seed(frames)
+    x = torch.randn(2, 30, frames, generator=rng)
+    body, view = _codes(model, x)
+    motion = model.encode_motion(x).detach().requires_grad_(True)
+    weights = torch.randn(2, 30, frames, generator=rng)  # a loss whose gradient is these weights
+    (model.decode(motion, body, view) * weights).sum().backward()
+    codes = [None if c is None else c.detach().numpy()[:, :, 0] for c in (body, view)]
+    kept: list[np.ndarray] = []
+    net._decode(motion.detach().numpy().transpose(0, 2, 1), net._first_bias(*codes), kept)
+    grad = net.decode_backward(weights.numpy().transpose(0, 2, 1), kept).transpose(0, 2, 1)
+    np.testing.assert_allclose(grad, motion.grad.numpy(), atol=TOL * np.abs(motion.grad.numpy()).max())
+
+
+def test_numpy_refinement_takes_torchs_steps():
+    from retarget.inference import numpy_refine, refine
+
+    model, net = _pair("full", seed=5)
+    x = torch.randn(3, 30, 96, generator=torch.Generator().manual_seed(5))
+    for steps, anchor in ((1, 0.3), (30, 0.3), (10, 0.0)):
+        encoded, refined = refine.refined_motion(model, x, steps, 0.02, anchor, 64, 32)
+        ours = numpy_refine.refined_motion(net, x.numpy(), steps, 0.02, anchor, 64, 32)
+        np.testing.assert_allclose(ours[0].transpose(0, 2, 1), encoded.numpy(), atol=TOL)
+        np.testing.assert_allclose(ours[1].transpose(0, 2, 1), refined.numpy(), atol=TOL)
+        assert np.abs(refined.numpy() - encoded.numpy()).max() > 10 * TOL  # the steps moved the codes
+    body, view = (c[:1].detach() for c in _codes(model, x))
+    with torch.no_grad():
+        decoded = refine.decode_refined(model, x, body, view, 5, 0.02, 0.3, 64, 32)
+    ours = numpy_refine.decode_refined(net, x.numpy(), body.numpy(), view.numpy(), 5, 0.02, 0.3, 64, 32)
+    np.testing.assert_allclose(ours, decoded.numpy(), atol=TOL)
+
+
 def test_static_codes_broadcast_over_the_batch_and_accept_flat_codes():
     model, net = _pair("full")
     x = torch.randn(4, 30, 64, generator=torch.Generator().manual_seed(1))

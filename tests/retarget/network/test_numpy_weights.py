@@ -77,9 +77,9 @@ def test_backend_choice(checkpoint):
     for backend in ("auto", "numpy"):
         assert isinstance(load_retargeter(checkpoint, "auto", plain, backend=backend), NumpyRetargeter)
         assert isinstance(load_retargeter(npz, "cpu", backend=backend), NumpyRetargeter)  # an export: numpy
-    # auto refines motion codes by default, which only torch does; numpy asked for by name runs without
-    assert isinstance(load_retargeter(checkpoint, "auto", backend="auto"), Retargeter)
-    assert load_retargeter(checkpoint, "auto", backend="numpy").config.refine_steps == 0
+    # numpy refines motion codes too: auto takes it for the default config as well
+    assert isinstance(load_retargeter(checkpoint, "auto", backend="auto"), NumpyRetargeter)
+    assert load_retargeter(checkpoint, "auto", backend="numpy").config.refine_steps == InferenceConfig().refine_steps
     assert isinstance(load_retargeter(checkpoint, "cpu", backend="torch"), Retargeter)
     with pytest.raises(InputError, match="runs on the CPU"):
         load_retargeter(checkpoint, "cuda", backend="numpy")
