@@ -254,14 +254,29 @@ def _train_steps(
     def time_up() -> bool:
         return world.is_main and limit_s is not None and run.elapsed() >= limit_s
 
+    def progress() -> float:  # share of the budget used: this call's time, or the total steps, whichever ends first
+        shares = [0.0]
+        if limit_s:
+            shares.append(run.elapsed() / limit_s)
+        if steps:  # steps count from the model's first (a resumed run to N steps in all equals one run of N)
+            shares.append(trainer.step_count / steps)
+        return min(1.0, max(shares))
+
     stop = distributed.any_rank(time_up())
+    # the budget's share used, as every process sees it (rank 0's clock and steps); at the start, the steps'
+    done = min(1.0, trainer.step_count / steps) if steps else 0.0
     try:
         while (steps is None or trainer.step_count < steps) and not stop:
+            trainer.set_lr(config.lr_factor(done))
             losses = _one_step(run, data)
             if grow is not None:
                 grow()
             save_due = world.is_main and time.perf_counter() - last_save > config.save_every_s
+            # rank 0's share rides with the losses, so that every process sets the same learning rate: the
+            # mean over ranks weights each by its samples, which add up to the batch, and only rank 0 gives one
+            losses["_done"] = progress() * config.batch_size / samples if world.is_main else 0.0
             losses, (stop, save_due) = distributed.reduce_logs(losses, samples, [time_up(), save_due])
+            done = losses.pop("_done")
             if trainer.step_count % config.preview_every == 0 and world.is_main:
                 write_png(preview_grid(trainer, data, rows), preview_path(run.out))
             if save_due:

@@ -76,6 +76,13 @@ class Trainer:
             self.opt_face_d = torch.optim.Adam(self.face_d.parameters(), lr=config.lr, betas=betas)
         self.step_count = 0
 
+    def set_lr(self, factor: float) -> None:
+        """Every optimiser's learning rate to ``factor`` times the config's."""
+        optimisers = [self.opt_g, self.opt_d] + ([self.opt_face_d] if self.face_d is not None else [])
+        for optimiser in optimisers:
+            for group in optimiser.param_groups:
+                group["lr"] = self.config.lr * factor
+
     def generate(self, pose: Tensor, prev: Tensor, plate: Tensor | None = None) -> Tensor:
         """G's frame (float32) for [B, 3, S, S] pose maps, previous frames and background plates (or None)."""
         with distributed.autocast(self.device, self.dtype):

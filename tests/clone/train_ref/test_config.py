@@ -38,3 +38,16 @@ def test_background_settings_round_trip_and_older_runs_had_none():
     assert not TrainConfig(background=False, plate_input=True).generator_config().uses_plate
     old = {k: v for k, v in TrainConfig().to_dict().items() if k not in ("background", "plate_input", "plate")}
     assert TrainConfig.from_dict(old) == TrainConfig(background=False)
+
+
+def test_the_learning_rate_falls_linearly_over_the_runs_last_part():
+    constant, tail = TrainConfig(lr_decay_from=1.0), TrainConfig(lr_decay_from=0.5)
+    assert TrainConfig().lr_decay_from == 0.5  # the default, chosen on real footage
+    assert [constant.lr_factor(p) for p in (0.0, 0.7, 1.0)] == [1.0, 1.0, 1.0]
+    assert [tail.lr_factor(p) for p in (0.0, 0.5, 0.75, 1.0)] == [1.0, 1.0, 0.5, 0.0]
+    assert TrainConfig(lr_decay_from=0.0).lr_factor(0.25) == 0.75
+    with pytest.raises(ValueError, match="lr_decay_from"):
+        TrainConfig(lr_decay_from=1.5)
+    stored = TrainConfig().to_dict()
+    del stored["lr_decay_from"]  # a model trained before the schedule resumes with a constant rate
+    assert TrainConfig.from_dict(stored).lr_decay_from == 1.0

@@ -89,6 +89,25 @@ def test_progress_goes_to_the_callback(reference, tmp_path):
     assert result.steps == result.steps_this_run == 2 and not result.interrupted
 
 
+def test_the_learning_rate_follows_the_runs_budget(reference, tmp_path, monkeypatch):
+    from clone.train_ref.trainer import Trainer
+
+    poses, frames = reference
+    seen: list[float] = []
+    original = Trainer.set_lr
+
+    def record(self, factor):
+        seen.append(factor)
+        original(self, factor)
+
+    monkeypatch.setattr(Trainer, "set_lr", record)
+    train_reference(poses, frames, tmp_path / "ref.pt", config=TrainConfig(size=32, lr_decay_from=0.5), steps=4,
+                    device="cpu")
+    assert seen == [1.0, 1.0, 1.0, 0.5]  # set before each step from the share done: 0, 1/4, 2/4, 3/4 of the steps
+    stored = load_reference_model(tmp_path / "ref.pt").training["trainer"]
+    assert stored["opt_g"]["param_groups"][0]["lr"] == 0.5 * TrainConfig().lr
+
+
 def _distance(a, b) -> float:
     sa, sb = a.build_generator().state_dict(), b.build_generator().state_dict()
     return sum(float((sa[k].float() - sb[k].float()).abs().sum()) for k in sa)
