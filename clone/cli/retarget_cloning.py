@@ -45,13 +45,17 @@ def eval_cloning(
     cache: WorldCacheOption = None,
     threads: Annotated[int | None, typer.Option("--threads", help="CPU threads (default: the free cores).")] = None,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
+    turns: Annotated[bool, typer.Option("--turns/--no-turns", help="Also a turning driver per clip: the child at "
+                     "-30° turning its whole body by 90-360° during the case, its truth turning alike (kind "
+                     "'turn', apart from 'all').")] = True,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Pose error and placement of retargeting weights on `clone demo`'s three pairs built from every clip of a split.
 
     Each usable clip of the split gives the demo's drivers (the child at +30°, the reference's own body at -30°,
-    the child at -30°) and their ground truth (the demo's reference character at +30°); every driver is moved onto
-    the demo's reference track as `clone drive` does it. Global scaling is scored on the same cases.
+    the child at -30°) and their ground truth (the demo's reference character at +30°), and a turning driver (the
+    child at -30° turning by 90-360°; --no-turns leaves it out); every driver is moved onto the demo's reference
+    track as `clone drive` does it. Global scaling is scored on the same cases.
     """
 
     from clone.demo import validation
@@ -79,14 +83,16 @@ def eval_cloning(
     methods["global scaling (EDN)"] = validation.global_scale_drive(reference)
     world = MotionWorld.build(mocap, cache, seed=world_seed)
     cases = validation.cloning_cases(world.split(split.value).clips, mocap, frames, clips, config,
-                                     world.config.fps)  # fmt: skip
+                                     world.config.fps, turns=turns)  # fmt: skip
     with progress_bar("eval-cloning") as bar:
         errors = validation.score(cases, methods, lambda done, _: bar(done, len(cases)))
     doc = validation.summarise(cases, errors, "ours")
     doc.update({
         "split": split.value, "frames": frames, "baseline": "ours",
         "weights": {name: str(path or PACKAGED_WEIGHTS) for name, path in networks.items()},
-        "pairs": "; ".join(f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs),
+        "pairs": "; ".join([f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs]
+                           + ([f"{validation.TURN_KIND}: {validation.TURN_CHARACTER} at {validation.TURN_YAW:+g}° "
+                               "turning by 90-360° (apart from 'all')"] if turns else [])),
         "reference": f"{config.reference_character} performing the built-in {config.reference_motion!r} motion at "
                      f"{config.reference_yaw:+g}°, {len(reference)} frames",
         "case_list": [{"clip": c.clip, "kind": c.kind,

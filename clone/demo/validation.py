@@ -3,7 +3,10 @@
 `clone demo` scores three drivers of one motion each. Here every clip of a motion-world split that is long enough
 becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at +30°, the reference's own body at
 -30°, the child at -30°), each with its ground truth: the demo's reference character performing the clip, seen by
-the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. Every driver is moved
+the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. With ``turns``, a fourth
+driver of kind ``turn``: the child at -30° turning its whole body by 90-360° either way during the case (one turn
+drawn per clip, :func:`retarget.world.turns.draw_turn`), its truth turning alike: real dancers and fashion models
+turn, the world's clips rarely do. Every driver is moved
 onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
 with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track kept
 on the reference's stage (:func:`clone.drive.poses.finish_driven`). The scores are the demo's primary measure, the RMSE of
@@ -38,6 +41,10 @@ Drive = Callable[[PoseTrack], PoseTrack]  # driver track -> driven track in the 
 DEMO = DemoConfig()
 # Clip frames before a case starts (mocap clips often open in a T-pose or a still stand).
 CASE_START = 15
+# The turning driver: its kind, body and camera (the demo's "both" pair), and the seed of the turns.
+TURN_KIND = "turn"
+TURN_CHARACTER, TURN_YAW = "child", -30.0
+TURN_SEED = 2019
 
 
 @dataclass(frozen=True)
@@ -59,7 +66,7 @@ class CloningCase:
 
 def cloning_cases(
     clips: Sequence[Mapping], mocap: str | Path, frames: int = 100, limit: int | None = None,
-    config: DemoConfig = DEMO, fps: float = 30.0,
+    config: DemoConfig = DEMO, fps: float = 30.0, turns: bool = False,
 ) -> list[CloningCase]:  # fmt: skip
     """The demo's pairs on every usable clip, clips in the given order, at most ``limit`` of them.
 
@@ -70,6 +77,7 @@ def cloning_cases(
         limit: the most clips to use (None: all).
         config: the demo whose reference and pairs are copied.
         fps: the world's frame rate.
+        turns: add each clip's turning driver (kind :data:`TURN_KIND`; skipped where its truth leaves the frame).
 
     Raises:
         InputError: no clip long enough whose ground truth stays inside the frame.
@@ -79,6 +87,7 @@ def cloning_cases(
     from clone.synth import get_character
     from clone.synth.performance import render_performance
     from retarget.world import load_motion
+    from retarget.world.turns import draw_turn
 
     ref_skeleton, ref_look, _ = get_character(config.reference_character)
     cases: list[CloningCase] = []
@@ -99,6 +108,14 @@ def cloning_cases(
             driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
             cases.append(CloningCase(clip["path"], pair.name, driver_track(driver, name=clip["path"]),
                                      truth.to_layout("body15")))  # fmt: skip
+        if turns:
+            turn = draw_turn(np.random.default_rng([TURN_SEED, used]), frames)
+            turned = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, turn=turn, **window)[1]
+            if stays_in_frame(config, turned):
+                skeleton, look, _ = get_character(TURN_CHARACTER)
+                driver = render_performance(motion, skeleton, look, yaw=TURN_YAW, turn=turn, **window)[1]
+                cases.append(CloningCase(clip["path"], TURN_KIND, driver_track(driver, name=clip["path"]),
+                                         turned.to_layout("body15")))  # fmt: skip
     if not cases:
         raise InputError(f"no clip of at least {CASE_START + frames} frames whose ground truth stays inside the frame")
     log.info("%d cloning cases from %d clips", len(cases), used)
@@ -158,9 +175,14 @@ def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
 
 
 def summarise(cases: Sequence[CloningCase], errors: Mapping[str, Mapping[str, np.ndarray]], baseline: str) -> dict:
-    """Per measure, row and pair kind the mean ± its standard error, and the paired difference to ``baseline``."""
+    """Per measure, row and pair kind the mean ± its standard error, and the paired difference to ``baseline``.
+
+    ``all`` is the demo's own pairs: the turning drivers (:data:`TURN_KIND`) are a kind of their own, so that
+    ``all`` reads the same with and without them."""
     kinds = list(dict.fromkeys(c.kind for c in cases))
-    masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds}, "all": np.ones(len(cases), bool)}
+    masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds},
+             "all": np.array([c.kind != TURN_KIND for c in cases])}  # fmt: skip
+    masks = {k: m for k, m in masks.items() if m.any()}
 
     def stats(values: np.ndarray) -> dict[str, float]:
         mean, se = mean_se(values)

@@ -34,6 +34,7 @@ from retarget.world.camera import (
     project,
 )
 from retarget.world.skeleton import WORLD_JOINTS, Motion3D, Skeleton, retarget_3d
+from retarget.world.turns import Turn, apply_turn
 
 logger = logging.getLogger(__name__)
 
@@ -116,6 +117,7 @@ def render_performance(
     size: int | tuple[int, int] = 256,
     start: int = 0,
     frames: int | None = None,
+    turn: Turn | None = None,
 ) -> tuple[Iterator[np.ndarray], PoseTrack, dict]:
     """Render ``motion`` performed by a character (``skeleton`` + ``look``) from a view.
 
@@ -137,6 +139,8 @@ def render_performance(
         size: canvas side (square) or (width, height) in pixels.
         start: first frame of the clip.
         frames: number of frames (default: to the end).
+        turn: a whole-body turn added to the clip after step 2 (:func:`retarget.world.turns.apply_turn`); the
+            view's yaw stays relative to the clip's facing before it, so the camera is where it would be.
 
     Returns:
         ``(frames, track, meta)``: an iterator of [H, W, 3] uint8 RGB frames, the BODY_25
@@ -151,6 +155,8 @@ def render_performance(
         raise ValueError(f"frames {start}..{stop - 1} are outside the motion's {total} frames")
     positions = retarget_3d(motion, skeleton).positions[start:stop]  # [T, 18, 3] metres, Y up
     facing = facing_angle(positions)
+    if turn is not None:
+        positions = apply_turn(positions, turn)
     camera = frame_camera(yaw, pitch, (w, h))
     xy, depth = project(positions, camera, facing, origin=ground_origin(positions))  # [T, 18, 2], [T, 18]
     track = body25_track(xy, WORLD_JOINTS, motion.fps, (w, h))

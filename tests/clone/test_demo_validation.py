@@ -74,6 +74,44 @@ def test_every_clip_gives_the_demos_three_pairs(world, tiny_mocap, cases) -> Non
         validation.cloning_cases(world.split("val").clips, tiny_mocap, 100_000)
 
 
+def test_a_turning_driver_per_clip_turns_with_its_truth_and_stays_apart_from_all(world, tiny_mocap, cases) -> None:
+    from clone.synth import get_character
+    from clone.synth.performance import render_performance
+    from retarget.world import load_motion
+    from retarget.world.turns import Turn
+
+    turned = validation.cloning_cases(world.split("val").clips, tiny_mocap, FRAMES, turns=True)
+    plain = [c for c in turned if c.kind != validation.TURN_KIND]
+    assert [(c.clip, c.kind) for c in plain] == [(c.clip, c.kind) for c in cases]  # the demo's pairs unchanged
+    assert all(a.driver.equals(b.driver) and a.truth.equals(b.truth) for a, b in zip(plain, cases, strict=True))
+    turning = [c for c in turned if c.kind == validation.TURN_KIND]
+    assert turning and len({c.clip for c in turning}) == len(turning)  # one per clip
+    same_clip = next(c for c in cases if c.clip == turning[0].clip and c.kind == "both")  # its body and camera
+    assert np.abs(turning[0].truth.joints - same_clip.truth.joints).max() > 5  # pixels: the truth turned too
+
+    errors = validation.score(turned, {"ours": lambda d: d, "other": lambda d: d})  # the driver as it is
+    doc = validation.summarise(turned, errors, "ours")
+    pose = doc["measures"]["pose_rmse_pct"]["ours"]
+    assert doc["kinds"] == [p.name for p in PAIRS] + [validation.TURN_KIND]
+    is_turn = np.array([c.kind == validation.TURN_KIND for c in turned])
+    assert pose["all"]["mean"] == pytest.approx(errors["pose_rmse_pct"]["ours"][~is_turn].mean())
+    assert pose["turn"]["mean"] == pytest.approx(errors["pose_rmse_pct"]["ours"][is_turn].mean())
+
+    # A half turn over the case: the body ends with its back to the camera (its shoulders change sides).
+    clip = world.split("val").clips[0]
+    motion = load_motion(tiny_mocap / clip["path"], fps=world.config.fps)
+    skeleton, look, _ = get_character("child")
+    window = {"size": 256, "start": validation.CASE_START, "frames": FRAMES}
+    half = render_performance(motion, skeleton, look, yaw=0.0, turn=Turn(180.0, 0.0, FRAMES - 1), **window)[1]
+    still = render_performance(motion, skeleton, look, yaw=0.0, **window)[1]
+    right, left = half.joint_layout.index("r_shoulder"), half.joint_layout.index("l_shoulder")
+
+    def side(track, t):
+        return np.sign(track.joints[t, right, 0] - track.joints[t, left, 0])
+
+    assert side(half, 0) == side(still, 0) == side(still, FRAMES - 1) != side(half, FRAMES - 1)
+
+
 def test_scores_rank_the_shipped_network_over_global_scaling_and_an_untrained_one(cases, tmp_path) -> None:
     torch.manual_seed(0)
     untrained = save_checkpoint(tmp_path / "untrained.pt", RetargetNet(variant_config("full")),
@@ -120,7 +158,8 @@ def test_command_writes_the_tables_and_refuses_bad_input(tiny_mocap, cache, tmp_
     assert result.exit_code == 0, result.output
     doc = json.loads((out / "cloning.json").read_text())
     assert list(doc["measures"]["pose_rmse_pct"]) == ["ours", "again", "global scaling (EDN)"]
-    assert doc["cases"] == len(PAIRS) and len(doc["case_list"]) == len(PAIRS)
+    assert doc["cases"] == len(doc["case_list"]) == len(PAIRS) + 1  # the demo's pairs and the turning driver
+    assert doc["kinds"][-1] == "turn" and "turn: child at -30° turning" in doc["pairs"]
     assert doc["measures"]["root_rmse_pct"]["again"]["vs_ours"]["all"]["mean"] == 0.0
     table = (out / "cloning.md").read_text()
     assert "## Pose error" in table and "## Placement" in table and table.count("Paired difference to ours") == 2
