@@ -91,8 +91,8 @@ def eval_cloning(
         "split": split.value, "frames": frames, "baseline": "ours",
         "weights": {name: str(path or PACKAGED_WEIGHTS) for name, path in networks.items()},
         "pairs": "; ".join([f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs]
-                           + ([f"{validation.TURN_KIND}: {validation.TURN_CHARACTER} at {validation.TURN_YAW:+g}° "
-                               "turning by 90-360° (apart from 'all')"] if turns else [])),
+                           + ([(f"{validation.TURN_KIND}: {validation.TURN_CHARACTER} at {validation.TURN_YAW:+g}° "
+                                "turning by 90-360° (apart from 'all')")] if turns else [])),
         "reference": f"{config.reference_character} performing the built-in {config.reference_motion!r} motion at "
                      f"{config.reference_yaw:+g}°, {len(reference)} frames",
         "case_list": [{"clip": c.clip, "kind": c.kind,
