@@ -224,6 +224,6 @@ def run(quick: bool = False, **_: object) -> dict[str, Any]:
              "here: memory the allocator gave back to the system and touches afresh. The baseline's count, and "
              "so its time, depends on what ran before it (at 10,000 frames measured 300 to 5,000 per call, "
              "29 to 38 ms, with the same code)"),
-            "the machine is shared with a training run on one of its 2 cores: absolute rates move with the load",
+            "absolute rates move with the machine's other load (the load averages of each row)",
         ],
     }

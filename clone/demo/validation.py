@@ -182,7 +182,6 @@ def summarise(cases: Sequence[CloningCase], errors: Mapping[str, Mapping[str, np
     kinds = list(dict.fromkeys(c.kind for c in cases))
     masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds},
              "all": np.array([c.kind != TURN_KIND for c in cases])}  # fmt: skip
-    masks = {k: m for k, m in masks.items() if m.any()}
 
     def stats(values: np.ndarray) -> dict[str, float]:
         mean, se = mean_se(values)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from retarget.inference.windows import strided_starts
+from retarget.inference.windows import sub_windows
 from retarget.network.numpy_net import NumpyRetargetNet
 from retarget.network.preprocess import POSE_CHANNELS
 
@@ -26,12 +26,7 @@ def window_static_codes(
     """Skeleton and view codes [B, C] of each window of ``x`` [B, 30, T]: the mean of the codes of its
     sub-windows of ``length`` frames ``stride`` apart, or of the whole window when it is shorter (as
     :func:`retarget.inference.refine.window_static_codes`). None for a code the network lacks."""
-    frames = x.shape[-1]
-    if frames <= length:
-        pieces, count = x, 1
-    else:
-        starts = strided_starts(frames, length, stride)
-        pieces, count = np.concatenate([x[:, :, s : s + length] for s in starts]), len(starts)  # [N * B, 30, length]
+    pieces, count = sub_windows(x, length, stride, np.concatenate)  # [N * B, 30, length]
 
     def mean_code(encode) -> np.ndarray:  # [N * B, C, 1] -> [B, C]
         return encode(pieces)[:, :, 0].reshape(count, x.shape[0], -1).mean(axis=0)

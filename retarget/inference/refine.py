@@ -19,7 +19,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-from retarget.inference.windows import strided_starts
+from retarget.inference.windows import sub_windows
 from retarget.network.model import RetargetNet
 from retarget.network.preprocess import pose_channels, velocity_channels
 
@@ -30,12 +30,7 @@ def window_static_codes(
     """Skeleton and view codes [B, C, 1] of each window of ``x`` [B, 30, T]: the mean of the codes of its
     sub-windows of ``length`` frames ``stride`` apart (the last one ending with the window), or of the whole
     window when it is shorter. None for a code the network lacks."""
-    frames = x.shape[-1]
-    if frames <= length:
-        pieces, count = x, 1
-    else:
-        starts = strided_starts(frames, length, stride)
-        pieces, count = torch.cat([x[:, :, s : s + length] for s in starts]), len(starts)  # [N * B, 30, length]
+    pieces, count = sub_windows(x, length, stride, torch.cat)  # [N * B, 30, length]
 
     def mean_code(encode) -> torch.Tensor:  # [N * B, C, 1] -> [B, C, 1]
         return encode(pieces).reshape(count, x.shape[0], -1, 1).mean(dim=0)

@@ -41,6 +41,18 @@ def strided_starts(frames: int, window: int, stride: int) -> list[int]:
     return starts
 
 
+def sub_windows(x, length: int, stride: int, concat: Callable) -> tuple[object, int]:
+    """The sub-windows a static code of each window of ``x`` [B, C, T] is averaged over: those of ``length`` frames
+    ``stride`` apart (:func:`strided_starts`), stacked start-major as [N * B, C, length], and N; ``x`` itself and 1
+    when it is no longer than ``length``. ``x`` is a numpy array or a torch tensor; ``concat`` joins a list of them
+    along the first axis (``np.concatenate``, ``torch.cat``)."""
+    frames = x.shape[-1]
+    if frames <= length:
+        return x, 1
+    starts = strided_starts(frames, length, stride)
+    return concat([x[:, :, s : s + length] for s in starts]), len(starts)
+
+
 def window_starts(total: int, window: int, overlap: int) -> list[int]:
     """First frames of the windows covering ``total`` (> ``window``) frames; the last one ends at ``total``."""
     return list(range(0, total - window, window - overlap)) + [total - window]

@@ -239,8 +239,7 @@ class NumpyRetargetNet:
                         *(_UpConv.build(w, b) for w, b in layers[1:]))  # fmt: skip
         # for the decoder's backward pass (motion-code refinement): each layer's transposed convolution as a
         # plain one over the zero-padded output gradient, taps reversed: [K * Cout, Cin]
-        self._transposed = tuple(_im2col_weight(w[:, :motion_dim].transpose(1, 0, 2)[:, :, ::-1]) if i == 0
-                                 else _im2col_weight(w.transpose(1, 0, 2)[:, :, ::-1])
+        self._transposed = tuple(_im2col_weight((w[:, :motion_dim] if i == 0 else w).transpose(1, 0, 2)[:, :, ::-1])
                                  for i, (w, _) in enumerate(layers))  # fmt: skip
 
     @property
