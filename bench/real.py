@@ -44,7 +44,7 @@ def _box_scores(pred: np.ndarray, truth: np.ndarray, box: tuple[int, int, int, i
 
 def face_box(joints: np.ndarray, layout, height: float, size: int) -> tuple[int, int, int, int] | None:
     """A square around the face points (nose, eyes, ears, mouth corners) a sixth of ``height`` across."""
-    from clone.train_ref.data import FACE_POINTS
+    from clone.model.face import FACE_POINTS
 
     names = [n for n in FACE_POINTS if layout.has(n)]
     points = joints[[layout.index(n) for n in names]]

@@ -15,6 +15,9 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
   hands and feet)
 - ``background``: ``{"plate": [S, S, 3] uint8}``, the reference's background plate on the canvas
   (:mod:`clone.model.background`), or None; a generator with ``alpha`` or ``plate_input`` composites over it
+- ``face_pass`` (optional): ``{"config", "state_dict", "radius"}``, the face pass (:mod:`clone.model.face`): its
+  U-Net's config and weights and the reference's face radius on the canvas; `clone drive` runs it after the
+  generator. Files without it drive as before.
 - ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
   the weights: ``steps``, ``seconds``, ``device``, ``config`` (the ``TrainConfig`` as a dict), ``trainer``
   (discriminator, both optimisers, step) and ``rng`` (the run's random state). A file without it drives as
@@ -40,6 +43,7 @@ import numpy as np
 import torch
 
 from clone.model.canvas import Canvas
+from clone.model.face import FacePass
 from clone.model.networks import GeneratorConfig, UNetGenerator, build_generator
 from clone.model.tensors import to_tensor
 from pose_io.atomic import atomic_file
@@ -76,6 +80,8 @@ class ReferenceModel:
         plate: [S, S, 3] uint8 RGB background plate on the canvas, or None (a model trained without one).
         pose_layout: the layout its pose maps are drawn in: ``body15`` (files before detailed maps) or
             ``body31`` (with face, hands and feet; :mod:`clone.model.detail_map`).
+        face_pass: ``{"config": GeneratorConfig dict, "state_dict", "radius": canvas pixels}`` of the face pass
+            (:mod:`clone.model.face`), or None.
     """
 
     generator_name: str
@@ -92,12 +98,26 @@ class ReferenceModel:
     temporal: bool = True
     plate: np.ndarray | None = None
     pose_layout: str = LAYOUT
+    face_pass: dict[str, Any] | None = None
 
     def build_generator(self, device: torch.device | str = "cpu") -> UNetGenerator:
         """The generator with its weights, in eval mode on ``device``."""
         net = build_generator(self.generator_name, self.generator_config)
         net.load_state_dict(self.generator_state)
         return net.to(device).eval()
+
+    def face_pass_net(self, device: torch.device | str = "cpu") -> UNetGenerator | None:
+        """The face pass's U-Net with its weights, in eval mode on ``device``; None for a model without one."""
+        if self.face_pass is None:
+            return None
+        net = UNetGenerator(GeneratorConfig.from_dict(self.face_pass["config"]))
+        net.load_state_dict(self.face_pass["state_dict"])
+        return net.to(device).eval()
+
+    def build_face_pass(self, device: torch.device | str = "cpu") -> FacePass | None:
+        """The face pass ready to drive (:class:`clone.model.face.FacePass`), or None for a model without one."""
+        net = self.face_pass_net(device)
+        return None if net is None else FacePass(net, float(self.face_pass["radius"]))
 
     def plate_tensor(self, device: torch.device | str = "cpu") -> torch.Tensor | None:
         """The background plate as the generator takes it, [1, 3, S, S] in [-1, 1] on ``device``; None without one."""
@@ -191,6 +211,12 @@ def save_reference_model(model: ReferenceModel, path: str | os.PathLike, overwri
         "background": None if model.plate is None else {"plate": torch.from_numpy(model.plate.copy())},
         "pose_layout": model.pose_layout,
     }
+    if model.face_pass is not None:
+        payload["face_pass"] = {
+            "config": dict(model.face_pass["config"]),
+            "state_dict": {k: v.detach().cpu().clone() for k, v in model.face_pass["state_dict"].items()},
+            "radius": float(model.face_pass["radius"]),
+        }
     if model.training is not None:
         # As it is: optimiser states have int keys and tensors that _to_storable would change.
         payload["training"] = _to_cpu(model.training)
@@ -248,6 +274,18 @@ def _plate(background: Any, config: GeneratorConfig, canvas: Canvas) -> np.ndarr
     return plate
 
 
+def _face_pass(entry: Any) -> dict[str, Any] | None:
+    """The stored face pass entry, checked for its parts (its weights are checked by building it)."""
+    if entry is None:
+        return None
+    if not isinstance(entry, dict) or any(k not in entry for k in ("config", "state_dict", "radius")):
+        raise TypeError("face_pass entry is not a dict of config, state_dict and radius")
+    radius = float(entry["radius"])
+    if not np.isfinite(radius) or radius <= 0:
+        raise ValueError(f"face_pass radius {radius!r} is not a positive number")
+    return {"config": dict(entry["config"]), "state_dict": dict(entry["state_dict"]), "radius": radius}
+
+
 def _pose_layout(name: Any) -> str:
     if name not in POSE_LAYOUTS:
         raise ValueError(f"pose maps in an unknown layout {name!r}")
@@ -280,8 +318,10 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
             temporal=bool(data.get("temporal", True)),
             plate=_plate(data.get("background"), config, canvas),
             pose_layout=_pose_layout(data.get("pose_layout", LAYOUT)),
+            face_pass=_face_pass(data.get("face_pass")),
         )
         model.build_generator("cpu")  # fails here, not mid-drive, when the weights do not fit the config
+        model.face_pass_net("cpu")
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         if isinstance(exc, InputError):
             raise

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -12,6 +13,7 @@ import torch
 from torch import Tensor
 
 from clone.model.canvas import image_to_canvas, render_pose_map
+from clone.model.face import FACE_CROP, FacePass
 from clone.model.networks import generator_input
 from clone.model.reference import ReferenceModel
 from clone.model.tensors import to_images, to_tensor
@@ -54,6 +56,17 @@ def build_drive_generator(model: ReferenceModel, device: torch.device, runtime: 
     return OnnxGenerator(net, model.canvas.size, model.generator_config.uses_plate)
 
 
+def build_drive_face_pass(model: ReferenceModel, device: torch.device, runtime: str = "auto") -> FacePass | None:
+    """The model's face pass ready to drive (None without one): on ONNX Runtime (fp32, a few ms a frame) when
+    the generator runs there, else torch."""
+    from clone.runtime.onnx import OnnxGenerator, generator_runtime
+
+    face_pass = model.build_face_pass(device)
+    if face_pass is None or generator_runtime(runtime, device) == "torch":
+        return face_pass
+    return FacePass(OnnxGenerator(face_pass.net, FACE_CROP, with_plate=False, threads=1), face_pass.radius)
+
+
 def generate_frames(
     model: ReferenceModel, track: PoseTrack, device: torch.device | str = "cpu", chunk: int = 16,
     runtime: str = "auto",
@@ -63,7 +76,8 @@ def generate_frames(
     Pose maps are drawn (in a background thread, :func:`draw_pose_maps`) and moved to the device ``chunk``
     frames at a time; a temporal generator then runs frame after frame on its own previous output (each
     frame yielded as soon as it is made), a non-temporal one on the whole chunk. A generator trained with a
-    background plate composites its frames over the plate stored in the model.
+    background plate composites its frames over the plate stored in the model; a model with a face pass
+    (:mod:`clone.model.face`) has each frame's face refined before it is yielded.
 
     Args:
         model: the reference model.
@@ -77,6 +91,33 @@ def generate_frames(
     """
     device = torch.device(device)
     net = build_drive_generator(model, device, runtime)
+    face_pass = build_drive_face_pass(model, device, runtime)
+    frames = _generator_frames(model, net, track, device, chunk)
+    if face_pass is None:
+        for pose_map, _pose, frame in frames:
+            with torch.inference_mode():
+                image = to_images(frame)[0]  # [S, S, 3]
+            yield pose_map, image
+        return
+    # The face pass of frame t runs in a thread while the generator makes frame t + 1 (it needs the
+    # generator's own frame t, not the refined one): on 2 cores it then costs little of the drive's speed.
+    centres = torch.from_numpy(_face_centres(model, track)).to(device)  # [T, 2] canvas pixels
+    with ThreadPoolExecutor(1, thread_name_prefix="face-pass") as pool:
+        pending = None
+        for t, (pose_map, pose, frame) in enumerate(frames):
+            job = pool.submit(_refined, face_pass, pose_map, pose, frame, centres[t:t + 1])
+            if pending is not None:
+                yield pending.result()
+            pending = job
+        if pending is not None:
+            yield pending.result()
+
+
+def _generator_frames(
+    model: ReferenceModel, net: Callable[..., Tensor], track: PoseTrack, device: torch.device, chunk: int,
+) -> Iterator[tuple[np.ndarray, Tensor, Tensor]]:
+    """The generator's frames of a track, one at a time: ``(pose map [S, S, 3] uint8, pose [1, 3, S, S],
+    frame [1, 3, S, S])`` (see :func:`generate_frames`)."""
     size = model.canvas.size
     prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
     plate = model.plate_tensor(device)  # [1, 3, S, S], or None for a model trained without one
@@ -88,14 +129,30 @@ def generate_frames(
             pose = to_tensor(maps).to(device)  # [C, 3, S, S]
         if not model.temporal:
             with torch.inference_mode():
-                frames = to_images(net(pose, plate))  # [C, S, S, 3]
-            yield from zip(maps, frames)
+                out = net(pose, plate)  # [C, 3, S, S]
+            for i in range(len(maps)):
+                yield maps[i], pose[i:i + 1], out[i:i + 1]
             continue
         for i in range(len(maps)):  # one frame at a time, so the encoder gets each as soon as it is made
             with torch.inference_mode():
+                # the next frame is conditioned on the generator's own frame, as in training
                 prev = net(generator_input(pose[i:i + 1], prev), plate)  # [1, 3, S, S]
-                frame = to_images(prev)[0]  # [S, S, 3]
-            yield maps[i], frame
+            yield maps[i], pose[i:i + 1], prev
+
+
+def _refined(face_pass: FacePass, pose_map: np.ndarray, pose: Tensor, frame: Tensor, centre: Tensor
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """``(pose map, frame [S, S, 3] uint8)`` with the face pass applied (in the face pass's thread)."""
+    with torch.inference_mode():
+        return pose_map, to_images(face_pass(frame, pose, centre))[0]
+
+
+def _face_centres(model: ReferenceModel, track: PoseTrack) -> np.ndarray:
+    """[T, 2] the face's centre on the canvas in each frame of a driven track (NaN where no face point shows)."""
+    from clone.model.face import face_centres
+
+    drawn = track.to_layout(model.pose_layout)
+    return face_centres(image_to_canvas(drawn.joints, model.canvas), drawn.joint_layout)
 
 
 def side_by_side_frame(driver_joints: np.ndarray, driver_canvas: Any, pose_map: np.ndarray, frame: np.ndarray,
@@ -106,4 +163,4 @@ def side_by_side_frame(driver_joints: np.ndarray, driver_canvas: Any, pose_map: 
     return np.concatenate([driver_map, pose_map, frame], axis=1)
 
 
-__all__ = ["build_drive_generator", "generate_frames", "side_by_side_frame"]
+__all__ = ["build_drive_face_pass", "build_drive_generator", "generate_frames", "side_by_side_frame"]

@@ -52,6 +52,8 @@ class ReferenceInfo:
             frames are read).
         details: the reference's track in the pose maps' layout (body31: with face, hands and feet), or None to
             draw ``track``.
+        face_radius: the face's radius on the canvas (:func:`clone.model.face.face_radius`), or None (no face
+            points, or before the frames are read): the face pass is stored only with it.
     """
 
     canvas: Canvas
@@ -63,6 +65,7 @@ class ReferenceInfo:
     codes_weights_path: str | None
     plate: np.ndarray | None = None
     details: PoseTrack | None = None
+    face_radius: float | None = None
 
 
 def checkpoint_model(
@@ -85,6 +88,10 @@ def checkpoint_model(
         "trainer": trainer.state_dict(),
         "rng": rng.get_state(),
     }
+    face_pass = None
+    if trainer.face_pass is not None and reference.face_radius is not None:
+        face_pass = {"config": trainer.face_pass.config.to_dict(), "state_dict": trainer.face_pass.state_dict(),
+                     "radius": reference.face_radius}
     return ReferenceModel(
         generator_name="unet",
         generator_config=trainer.g.config,
@@ -100,6 +107,7 @@ def checkpoint_model(
         temporal=config.temporal,
         plate=reference.plate,
         pose_layout=config.pose_layout,
+        face_pass=face_pass,
     )
 
 

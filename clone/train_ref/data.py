@@ -21,11 +21,12 @@ from torch import Tensor
 from clone.choices import Align
 from clone.model.background import PlateConfig, estimate_plate
 from clone.model.canvas import render_pose_map
+from clone.model.face import face_mask, face_radius
 from clone.model.reference import LAYOUT, file_sha256
 from clone.model.tensors import to_tensor
 from pose_io.errors import InputError
-from pose_io.layouts import BODY15, JointLayout, get_layout
-from pose_io.measures import reference_limb_lengths, skeleton_height
+from pose_io.layouts import get_layout
+from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
 from retarget.baselines.global_scale import ScaleStats, scale_stats
 
@@ -102,36 +103,6 @@ class ReferenceData:
             faces = np.stack([face_mask(self.joints[i], self.layout, self.face_radius, self.size) for i in idx])
             sample["face"] = torch.from_numpy(faces[:, None].astype(np.float32))  # [B, 1, S, S]
         return sample
-
-
-FACE_POINTS = ("nose", "r_eye", "l_eye", "r_ear", "l_ear", "mouth_right", "mouth_left")
-
-
-def face_radius(joints: np.ndarray, layout: JointLayout) -> float | None:
-    """Radius of the face's disc in canvas pixels (a twelfth of the body's standing height), or None when the
-    layout has no face points or the track gives no height."""
-    if not any(layout.has(n) for n in FACE_POINTS[1:]):
-        return None
-    body = joints[:, : len(BODY15.joints)] if layout.name != "body15" else joints
-    try:
-        height = skeleton_height(body, "body15")
-    except InputError:
-        return None
-    return max(3.0, height / 12.0) if np.isfinite(height) else None
-
-
-def face_mask(joints: np.ndarray, layout: JointLayout, radius: float, size: int) -> np.ndarray:
-    """[S, S] bool: a disc of ``radius`` around the mean of the frame's visible face points (none visible: empty)."""
-    import cv2
-
-    points = joints[[layout.index(n) for n in FACE_POINTS if layout.has(n)]]
-    points = points[np.isfinite(points).all(axis=-1)]
-    mask = np.zeros((size, size), dtype=np.uint8)
-    if len(points):
-        cx, cy = points.mean(axis=0)
-        if -radius < cx < size + radius and -radius < cy < size + radius:
-            cv2.circle(mask, (round(cx), round(cy)), round(radius), 1, -1)
-    return mask.astype(bool)
 
 
 def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:

@@ -221,8 +221,13 @@ def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarra
     log.info("read %d frames in %.1f s", count, run.elapsed())
     drawn = run.reference.details if run.reference.details is not None else run.reference.track
     loss = run.config.loss
-    return ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout,
-                         faces=bool(loss.face or loss.face_gan))
+    data = ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout,
+                         faces=bool(loss.face or loss.face_gan or run.config.face_pass))
+    if run.config.face_pass:
+        if data.face_radius is None:
+            log.info("the reference's poses have no face points: no face pass is trained")
+        run.reference = replace(run.reference, face_radius=data.face_radius)
+    return data
 
 
 def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel | None) -> None:

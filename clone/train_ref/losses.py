@@ -6,7 +6,6 @@ Images are ``[B, 3, S, S]`` in [-1, 1]; weight maps ``[B, 1, S, S]``.
 
 from __future__ import annotations
 
-import torch
 import torch.nn.functional as F
 from torch import Tensor
 
@@ -77,43 +76,5 @@ def laplacian_loss(fake: Tensor, real: Tensor, weights: Tensor, levels: int = 4)
     return total / len(fakes)
 
 
-# The face crop the face discriminator judges: this many pixels square, this many face-disc radii across.
-FACE_CROP = 64
+# The face crop the face discriminator judges: this many face-disc radii either side of the centre.
 FACE_CROP_RADII = 3.0
-
-
-def face_boxes(face: Tensor) -> tuple[Tensor, Tensor]:
-    """Square boxes around each sample's face disc, for :func:`kornia.geometry.transform.crop_and_resize`.
-
-    Args:
-        face: [B, 1, S, S] face discs (:func:`clone.train_ref.data.face_mask`, warped).
-
-    Returns:
-        ``(boxes [B, 4, 2] corner points (x, y) clockwise from top-left, present [B] bool)``; a sample without a
-        face gets a box over the whole canvas and ``present`` False.
-    """
-    _, _, h, w = face.shape
-    mass = face.flatten(1).sum(dim=1)  # [B]
-    present = mass > 4.0
-    ys = torch.arange(h, dtype=face.dtype, device=face.device)[None, :, None]
-    xs = torch.arange(w, dtype=face.dtype, device=face.device)[None, None, :]
-    m = face[:, 0]
-    safe = mass.clamp(min=1.0)
-    cx = (m * xs).flatten(1).sum(1) / safe
-    cy = (m * ys).flatten(1).sum(1) / safe
-    radius = (mass.clamp(min=1.0) / torch.pi).sqrt()
-    half = FACE_CROP_RADII * radius
-    cx = torch.where(present, cx, torch.full_like(cx, (w - 1) / 2))
-    cy = torch.where(present, cy, torch.full_like(cy, (h - 1) / 2))
-    half = torch.where(present, half, torch.full_like(half, max(h, w) / 2))
-    x0, x1, y0, y1 = cx - half, cx + half, cy - half, cy + half
-    boxes = torch.stack([torch.stack([x0, y0], -1), torch.stack([x1, y0], -1), torch.stack([x1, y1], -1),
-                         torch.stack([x0, y1], -1)], dim=1)  # [B, 4, 2]
-    return boxes, present
-
-
-def face_crops(images: Tensor, boxes: Tensor) -> Tensor:
-    """[B, C, FACE_CROP, FACE_CROP] crops of ``images`` [B, C, S, S] in ``boxes`` (bilinear, zeros outside)."""
-    from kornia.geometry.transform import crop_and_resize
-
-    return crop_and_resize(images, boxes, (FACE_CROP, FACE_CROP), align_corners=True)

@@ -17,14 +17,20 @@ from pose_io.atomic import atomic_file
 def preview_grid(trainer: Trainer, data: ReferenceData, rows: np.ndarray) -> np.ndarray:
     """[R*S, 3*S, 3] uint8 grid, one row per frame: pose map | generated | real.
 
-    G gets the real previous frame (no dropout, no jitter), as when driving from a good previous frame.
+    G gets the real previous frame (no dropout, no jitter), as when driving from a good previous frame; the
+    face pass, if the run trains one, refines its faces.
     """
     sample = data.batch(rows)
     with torch.no_grad():
         trainer.g.eval()
         plate = sample["plate"].to(trainer.device) if "plate" in sample else None
-        fake = trainer.generate(sample["pose_cur"].to(trainer.device), sample["frame_prev"].to(trainer.device), plate)
+        pose = sample["pose_cur"].to(trainer.device)
+        fake = trainer.generate(pose, sample["frame_prev"].to(trainer.device), plate)
         trainer.g.train()
+        if trainer.face_pass is not None and "face" in sample:
+            trainer.face_pass.eval()
+            fake = trainer.refine_faces(fake, pose, sample["face"].to(trainer.device))
+            trainer.face_pass.train()
     cols = [to_images(sample["pose_cur"]), to_images(fake), to_images(sample["frame_cur"])]
     return np.concatenate([np.concatenate(c, axis=0) for c in cols], axis=1)
 

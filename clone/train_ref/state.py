@@ -122,7 +122,9 @@ def start_run(
     torch.manual_seed(config.seed)
     start = previous if previous is not None else (init[0] if init is not None else None)
     generator = start.build_generator(device).train() if start is not None else None
-    trainer = Trainer(config, device, generator, dtype)
+    # the face pass too, when the run trains one and the model it starts from has one
+    face_pass = start.face_pass_net(device) if start is not None and config.face_pass else None
+    trainer = Trainer(config, device, generator, dtype, face_pass=face_pass.train() if face_pass else None)
     if previous is None and init is not None and init[1] is not None:
         trainer.d.load_state_dict(init[1]["state_dict"])
     rng = torch.Generator().manual_seed(config.seed)

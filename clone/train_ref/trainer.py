@@ -20,6 +20,15 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from clone.model.face import (
+    FACE_PASS_RADII,
+    blend_mask,
+    build_face_pass,
+    face_boxes,
+    face_crops,
+    paste,
+    refine_crops,
+)
 from clone.model.networks import (
     FRAME_CHANNELS,
     POSE_CHANNELS,
@@ -47,11 +56,13 @@ class Trainer:
         device: where the networks live (this process's GPU under ``torchrun``).
         generator: an existing generator (resuming); a fresh one when None.
         dtype: autocast dtype of the networks (bfloat16 on CUDA), None for float32.
+        face_pass: an existing face pass (resuming, or a model started from); a fresh one when None and the
+            config asks for one.
     """
 
     def __init__(
         self, config: TrainConfig, device: torch.device, generator: UNetGenerator | None = None,
-        dtype: torch.dtype | None = None,
+        dtype: torch.dtype | None = None, face_pass: UNetGenerator | None = None,
     ) -> None:
         self.config = config
         self.device = device
@@ -74,12 +85,31 @@ class Trainer:
             self.face_d = build_discriminator("patch", face_config).to(device).train()
             self._face_d_step = distributed.wrap(self.face_d, device)
             self.opt_face_d = torch.optim.Adam(self.face_d.parameters(), lr=config.lr, betas=betas)
+        # The face pass (clone.model.face): its U-Net and its own discriminator on face crops, trained on G's
+        # frames without a gradient into G.
+        self.face_pass: UNetGenerator | None = None
+        if config.face_pass:
+            self.face_pass = (face_pass or build_face_pass()).to(device).train()
+            pass_config = DiscriminatorConfig(in_channels=POSE_CHANNELS + FRAME_CHANNELS,
+                                              base_channels=config.disc_channels, num_layers=2)
+            self.face_pass_d: PatchDiscriminator = build_discriminator("patch", pass_config).to(device).train()
+            self._face_pass_step = distributed.wrap(self.face_pass, device)
+            self._face_pass_d_step = distributed.wrap(self.face_pass_d, device)
+            self.opt_face_pass = torch.optim.Adam(self.face_pass.parameters(), lr=config.lr, betas=betas)
+            self.opt_face_pass_d = torch.optim.Adam(self.face_pass_d.parameters(), lr=config.lr, betas=betas)
         self.step_count = 0
+
+    def _optimisers(self) -> list[torch.optim.Optimizer]:
+        optimisers = [self.opt_g, self.opt_d]
+        if self.face_d is not None:
+            optimisers.append(self.opt_face_d)
+        if self.face_pass is not None:
+            optimisers += [self.opt_face_pass, self.opt_face_pass_d]
+        return optimisers
 
     def set_lr(self, factor: float) -> None:
         """Every optimiser's learning rate to ``factor`` times the config's."""
-        optimisers = [self.opt_g, self.opt_d] + ([self.opt_face_d] if self.face_d is not None else [])
-        for optimiser in optimisers:
+        for optimiser in self._optimisers():
             for group in optimiser.param_groups:
                 group["lr"] = self.config.lr * factor
 
@@ -87,6 +117,17 @@ class Trainer:
         """G's frame (float32) for [B, 3, S, S] pose maps, previous frames and background plates (or None)."""
         with distributed.autocast(self.device, self.dtype):
             return self.g(generator_input(pose, prev) if self.config.temporal else pose, plate).float()
+
+    def refine_faces(self, frame: Tensor, pose: Tensor, face: Tensor) -> Tensor:
+        """G's frames [B, 3, S, S] with the face pass applied where ``face`` [B, 1, S, S] (the samples' face
+        discs) shows one, as `clone drive` applies it; the frames as they are without a face pass."""
+        if self.face_pass is None:
+            return frame
+        boxes, present = face_boxes(face, FACE_PASS_RADII)
+        crop = face_crops(frame, boxes)
+        with distributed.autocast(self.device, self.dtype):
+            refined = refine_crops(self.face_pass, face_crops(pose, boxes), crop, blend_mask(frame.device)).float()
+        return paste(frame, (refined - crop) * present[:, None, None, None].float(), boxes)
 
     def previous_input(
         self, sample: dict[str, Tensor], generator: torch.Generator, part: slice | None = None,
@@ -165,11 +206,11 @@ class Trainer:
         terms = {}
         face = None
         if self.face_d is not None and "face" in sample:
-            boxes, present = losses.face_boxes(sample["face"])
+            boxes, present = face_boxes(sample["face"], losses.FACE_CROP_RADII)
             share = present.float() / present.float().sum().clamp(min=1.0)  # [B] mean over samples with a face
-            pose_crop = losses.face_crops(sample["pose_cur"], boxes)
-            real_face = torch.cat([pose_crop, losses.face_crops(real, boxes)], dim=1)  # [B, 6, 64, 64]
-            fake_face = torch.cat([pose_crop, losses.face_crops(fake, boxes)], dim=1)
+            pose_crop = face_crops(sample["pose_cur"], boxes)
+            real_face = torch.cat([pose_crop, face_crops(real, boxes)], dim=1)  # [B, 6, 64, 64]
+            fake_face = torch.cat([pose_crop, face_crops(fake, boxes)], dim=1)
             face = (real_face, fake_face, share)
             self.face_d.requires_grad_(False)
             fake_feats_face = self.face_d(fake_face)
@@ -208,9 +249,48 @@ class Trainer:
             (loss_face_d if weight == 1.0 else weight * loss_face_d).backward()
             self.opt_face_d.step()
             terms["face_d"] = loss_face_d
+        if self.face_pass is not None and "face" in sample:
+            terms.update(self.face_pass_step(sample, fake.detach(), weight))
         self.step_count += 1
         return {"l1": l1.item(), "gan": gan.item(), "fm": fm.item(), "d": loss_d.item(),
                 **{k: v.item() for k, v in terms.items()}}
+
+    def face_pass_step(self, sample: dict[str, Tensor], fake: Tensor, weight: float = 1.0) -> dict[str, Tensor]:
+        """One update of the face pass and then of its discriminator, on G's frames ``fake`` [B, 3, S, S]
+        (no gradient into G): L1 to the real crop inside the blend mask, least-squares GAN and feature
+        matching at the run's weights. Samples without a face count zero (their step still runs, so that
+        every process of a group steps alike)."""
+        w = self.config.loss
+        boxes, present = face_boxes(sample["face"], FACE_PASS_RADII)
+        share = present.float() / present.float().sum().clamp(min=1.0)  # [B] mean over samples with a face
+        mask = blend_mask(fake.device)  # [1, 1, C, C]
+        pose_crop = face_crops(sample["pose_cur"], boxes)  # [B, 3, C, C]
+        real_crop = face_crops(sample["frame_cur"], boxes)
+        with distributed.autocast(self.device, self.dtype):
+            refined = refine_crops(self._face_pass_step, pose_crop, face_crops(fake, boxes), mask).float()
+            self.face_pass_d.requires_grad_(False)
+            fake_feats = self.face_pass_d(torch.cat([pose_crop, refined], dim=1))
+            with torch.no_grad():
+                real_feats = self.face_pass_d(torch.cat([pose_crop, real_crop], dim=1))
+        l1 = (mask * (refined - real_crop).abs()).mean(dim=(1, 2, 3)) / mask.mean()  # [B]
+        gan = ((fake_feats[-1].float() - 1.0) ** 2).mean(dim=(1, 2, 3))
+        fm = torch.stack([(f.float() - r.float()).abs().mean(dim=(1, 2, 3))
+                          for f, r in zip(fake_feats[:-1], real_feats[:-1])]).mean(dim=0)
+        loss = (share * (w.l1 * l1 + w.gan * gan + w.feature_matching * fm)).sum()
+        self.opt_face_pass.zero_grad(set_to_none=True)
+        (loss if weight == 1.0 else weight * loss).backward()
+        self.opt_face_pass.step()
+
+        self.face_pass_d.requires_grad_(True)
+        with distributed.autocast(self.device, self.dtype):
+            d_real = ((self._face_pass_d_step(torch.cat([pose_crop, real_crop], dim=1))[-1].float() - 1.0) ** 2)
+            d_fake = self._face_pass_d_step(torch.cat([pose_crop, refined.detach()], dim=1))[-1].float() ** 2
+            loss_d = 0.5 * (share * (d_real.mean(dim=(1, 2, 3)) + d_fake.mean(dim=(1, 2, 3)))).sum()
+        self.opt_face_pass_d.zero_grad(set_to_none=True)
+        (loss_d if weight == 1.0 else weight * loss_d).backward()
+        self.opt_face_pass_d.step()
+        return {"face_pass_l1": (share * l1).sum().detach(), "face_pass_gan": (share * gan).sum().detach(),
+                "face_pass_d": loss_d.detach()}
 
     def state_dict(self) -> dict[str, Any]:
         """What resuming needs besides G's weights: D (and the face D), the optimisers and the step."""
@@ -224,6 +304,11 @@ class Trainer:
             state["face_discriminator"] = {"config": self.face_d.config.to_dict(),
                                            "state_dict": self.face_d.state_dict(),
                                            "optimizer": self.opt_face_d.state_dict()}
+        if self.face_pass is not None:
+            state["face_pass"] = {"optimizer": self.opt_face_pass.state_dict(),
+                                  "discriminator": {"config": self.face_pass_d.config.to_dict(),
+                                                    "state_dict": self.face_pass_d.state_dict(),
+                                                    "optimizer": self.opt_face_pass_d.state_dict()}}
         return state
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -232,6 +317,10 @@ class Trainer:
         if self.face_d is not None and "face_discriminator" in state:
             self.face_d.load_state_dict(state["face_discriminator"]["state_dict"])
             self.opt_face_d.load_state_dict(state["face_discriminator"]["optimizer"])
+        if self.face_pass is not None and "face_pass" in state:
+            self.opt_face_pass.load_state_dict(state["face_pass"]["optimizer"])
+            self.face_pass_d.load_state_dict(state["face_pass"]["discriminator"]["state_dict"])
+            self.opt_face_pass_d.load_state_dict(state["face_pass"]["discriminator"]["optimizer"])
         self.opt_g.load_state_dict(state["opt_g"])
         self.opt_d.load_state_dict(state["opt_d"])
         self.step_count = int(state["step"])

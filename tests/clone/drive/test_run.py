@@ -305,3 +305,33 @@ def test_bad_stage_is_one_line_error(trained, driver, tmp_path):
     model = load_reference_model(trained)
     with pytest.raises(InputError, match="valid: reference, raw"):
         drive_poses(read_track(driver), model, "global-scale", stage="floor")
+
+
+def test_a_face_pass_changes_the_face_only_and_not_the_frames_after(trained):
+    """The face pass refines the shown frame around the face; the generator goes on from its own frame, so
+    every pixel away from the face is the same as without the pass."""
+    from dataclasses import replace
+
+    from clone.model.canvas import image_to_canvas
+    from clone.model.face import FACE_PASS_RADII, build_face_pass, face_pass_config
+
+    model = load_reference_model(trained)
+    torch.manual_seed(0)
+    net = build_face_pass()
+    for p in net.parameters():
+        p.data.normal_(0.0, 0.2)
+    radius = 2.0
+    passed = replace(model, face_pass={"config": face_pass_config().to_dict(), "state_dict": net.state_dict(),
+                                       "radius": radius})
+    track = model.reference_track.frames(0, 5)
+    plain = [f for _, f in generate_frames(model, track, runtime="torch")]
+    refined = [f for _, f in generate_frames(passed, track, runtime="torch")]
+    nose = image_to_canvas(track.to_layout(model.pose_layout).joints, model.canvas)[:, 0]  # [T, 2] canvas pixels
+    changed = 0
+    for t, (a, b) in enumerate(zip(plain, refined)):
+        differs = np.abs(a.astype(int) - b.astype(int)).max(axis=-1) > 0  # [S, S]
+        ys, xs = np.nonzero(differs)
+        changed += len(ys)
+        half = FACE_PASS_RADII * radius + 1.5
+        assert (np.abs(xs - nose[t, 0]) <= half).all() and (np.abs(ys - nose[t, 1]) <= half).all()
+    assert changed > 0

@@ -230,3 +230,26 @@ def test_pose_layout_round_trip_and_files_before_it_draw_body15(tmp_path):
     torch.save({**data, "pose_layout": "smpl"}, path)
     with pytest.raises(InputError, match="damaged reference model \\(.*unknown layout 'smpl'"):
         load_reference_model(path)
+
+
+def test_face_pass_round_trip_and_a_damaged_one_is_refused(tmp_path):
+    from clone.model.face import build_face_pass, face_pass_config
+
+    torch.manual_seed(3)
+    net = build_face_pass()
+    for p in net.parameters():  # something other than the zero start
+        p.data.normal_(0.0, 0.1)
+    entry = {"config": face_pass_config().to_dict(), "state_dict": net.state_dict(), "radius": 4.5}
+    assert _model().face_pass is None and _model().build_face_pass() is None
+    back = load_reference_model(save_reference_model(_model(face_pass=entry), tmp_path / "ref.pt"))
+    passed = back.build_face_pass()
+    assert passed.radius == 4.5
+    x = torch.rand(1, 6, 64, 64)
+    with torch.no_grad():
+        torch.testing.assert_close(passed.net(x), net.eval()(x), rtol=0, atol=0)
+    data = torch.load(tmp_path / "ref.pt", weights_only=True)
+    for bad, message in (({**entry, "radius": -1.0}, "radius"), ({"config": entry["config"]}, "face_pass entry"),
+                         ({**entry, "state_dict": {}}, "loading state_dict")):
+        torch.save({**data, "face_pass": bad}, tmp_path / "bad.pt")
+        with pytest.raises(InputError, match=f"damaged reference model \\(.*{message}"):
+            load_reference_model(tmp_path / "bad.pt")

@@ -84,7 +84,8 @@ def test_face_mask_follows_the_face_points_and_the_warp():
 def test_a_step_with_every_term_reports_them_and_lowers_the_weighted_l1():
     torch.manual_seed(0)
     loss = LossConfig(person=4.0, face=8.0, ssim=10.0, laplacian=100.0)
-    trainer = Trainer(TrainConfig(size=32, base_channels=8, disc_channels=8, lr=1e-3, loss=loss), torch.device("cpu"))
+    trainer = Trainer(TrainConfig(size=32, base_channels=8, disc_channels=8, lr=1e-3, loss=loss, face_pass=False),
+                      torch.device("cpu"))
     batch = {k: _images(i) for i, k in enumerate(("pose_prev", "pose_cur", "frame_prev", "frame_cur", "plate"))}
     batch["face"] = torch.zeros(2, 1, 32, 32)
     batch["face"][:, :, 4:10, 12:20] = 1.0
@@ -106,23 +107,9 @@ def test_bfloat16_on_the_cpu_only_where_it_has_the_instructions(monkeypatch):
     assert distributed.amp_dtype(cpu, True, cpu=True) is None
 
 
-def test_face_boxes_centre_on_the_disc_and_mark_samples_without_a_face():
-    face = torch.zeros(2, 1, 64, 64)
-    yy, xx = torch.meshgrid(torch.arange(64.0), torch.arange(64.0), indexing="ij")
-    face[0, 0] = ((xx - 40) ** 2 + (yy - 20) ** 2 <= 5 ** 2).float()
-    boxes, present = losses.face_boxes(face)
-    assert present.tolist() == [True, False]
-    centre = boxes[0].mean(dim=0)
-    torch.testing.assert_close(centre, torch.tensor([40.0, 20.0]), atol=0.3, rtol=0)
-    side = boxes[0, 1, 0] - boxes[0, 0, 0]
-    assert side == pytest.approx(2 * losses.FACE_CROP_RADII * 5, rel=0.1)
-    crops = losses.face_crops(torch.rand(2, 3, 64, 64), boxes)
-    assert crops.shape == (2, 3, losses.FACE_CROP, losses.FACE_CROP)
-
-
 def test_the_face_discriminator_trains_beside_and_resumes():
     torch.manual_seed(0)
-    config = TrainConfig(size=32, base_channels=8, disc_channels=8, loss=LossConfig(face_gan=1.0))
+    config = TrainConfig(size=32, base_channels=8, disc_channels=8, loss=LossConfig(face_gan=1.0), face_pass=False)
     trainer = Trainer(config, torch.device("cpu"))
     batch = {k: _images(i) for i, k in enumerate(("pose_prev", "pose_cur", "frame_prev", "frame_cur", "plate"))}
     batch["face"] = torch.zeros(2, 1, 32, 32)
