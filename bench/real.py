@@ -62,7 +62,7 @@ def measure(model_path: Path, track, video: Path, start: int, strip: Path | None
     """Drive the model with frames ``start..`` of ``track`` and score them against the real frames; ``strip``:
     also write real (top) | generated (bottom) of six held-out frames there, to look at."""
     from clone.drive.poses import drive_poses, driver_track
-    from clone.metrics import frame_pair_scores, person_box
+    from clone.metrics import FlickerMeter, frame_pair_scores, person_box
     from clone.model.canvas import cut_frame, image_to_canvas
     from clone.model.reference import load_reference_model
     from clone.runtime.generate import generate_frames
@@ -82,12 +82,10 @@ def measure(model_path: Path, track, video: Path, start: int, strip: Path | None
     plate = model.plate
     rows: dict[str, list[float]] = {k: [] for k in ("ssim", "psnr", "person_ssim", "person_psnr", "face_ssim",
                                                     "plate_person_ssim", "plate_face_ssim")}
-    boxes = []
     for t, (pred, truth) in enumerate(zip(preds, truths)):
         s, p = frame_pair_scores(pred, truth)
         box = person_box(body[t], (SIZE, SIZE))
         face = face_box(canvas_joints[t], layout, height, SIZE)
-        boxes.append(box)
         ps, pp = _box_scores(pred, truth, box)
         fs, _ = _box_scores(pred, truth, face)
         rows["ssim"].append(s), rows["psnr"].append(p), rows["person_ssim"].append(ps)
@@ -98,15 +96,10 @@ def measure(model_path: Path, track, video: Path, start: int, strip: Path | None
     out = {k: float(np.nanmean(v)) if v else float("nan") for k, v in rows.items()}
 
     def flicker(frames: list[np.ndarray]) -> float:
-        changes = []
-        for t in range(1, len(frames)):
-            box = boxes[t]
-            if box is None:
-                continue
-            x0, y0, x1, y1 = box
-            a, b = frames[t - 1][y0:y1, x0:x1].astype(np.float32), frames[t][y0:y1, x0:x1].astype(np.float32)
-            changes.append(float(np.abs(a - b).mean()))
-        return float(np.mean(changes)) if changes else float("nan")
+        meter = FlickerMeter()
+        for t, frame in enumerate(frames):
+            meter.add(frame, body[t])
+        return meter.value()
 
     out["flicker_ratio"] = flicker(preds) / flicker(truths)
     if strip is not None:

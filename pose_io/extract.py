@@ -10,6 +10,7 @@ detections, and become missing, as do frames where MediaPipe finds nobody.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import warnings
@@ -111,6 +112,54 @@ def landmarks_to_arrays(landmarks: object, size: tuple[int, int], min_visibility
     return joints, conf
 
 
+class PoseEstimator:
+    """MediaPipe Pose, one frame at a time (a context manager; its native log lines kept from the user).
+
+    Args:
+        config: MediaPipe settings.
+
+    ``estimator.process(frame)`` of an [H, W, 3] uint8 RGB frame gives its ([33, 2] pixels, [33] confidence);
+    frames are tracked in the order they are given unless ``config.static_image_mode``.
+    """
+
+    def __init__(self, config: ExtractConfig = ExtractConfig()) -> None:
+        self.config = config
+        self._stack = contextlib.ExitStack()
+        self._estimator = None
+
+    def __enter__(self) -> PoseEstimator:  # noqa: PYI034 (typing.Self needs Python 3.11)
+        config, stack = self.config, self._stack
+        try:
+            stack.enter_context(quiet_native_logs())
+            stack.enter_context(warnings.catch_warnings())
+            mp_pose = load_mediapipe_pose()
+            warnings.simplefilter("ignore", UserWarning)  # protobuf deprecation noise from inside mediapipe
+            self._estimator = stack.enter_context(mp_pose.Pose(
+                static_image_mode=config.static_image_mode,
+                model_complexity=config.model_complexity,
+                smooth_landmarks=config.smooth_landmarks,
+                enable_segmentation=False,
+                min_detection_confidence=config.min_detection_confidence,
+                min_tracking_confidence=config.min_tracking_confidence,
+            ))
+        except BaseException:
+            stack.close()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._estimator = None
+        self._stack.close()
+
+    def process(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """([33, 2] pixel coordinates, [33] confidence) of the person MediaPipe finds in ``frame``."""
+        if self._estimator is None:
+            raise RuntimeError("PoseEstimator.process outside its with block")
+        h, w = frame.shape[:2]
+        result = self._estimator.process(frame)
+        return landmarks_to_arrays(result.pose_landmarks, (w, h), self.config.min_visibility)
+
+
 def extract_track(
     frames: Frames,
     config: ExtractConfig = ExtractConfig(),
@@ -128,24 +177,13 @@ def extract_track(
         missing).
     """
     joints, conf = [], []
-    with quiet_native_logs(), warnings.catch_warnings():
-        mp_pose = load_mediapipe_pose()
-        warnings.simplefilter("ignore", UserWarning)  # protobuf deprecation noise from inside mediapipe
-        with mp_pose.Pose(
-            static_image_mode=config.static_image_mode,
-            model_complexity=config.model_complexity,
-            smooth_landmarks=config.smooth_landmarks,
-            enable_segmentation=False,
-            min_detection_confidence=config.min_detection_confidence,
-            min_tracking_confidence=config.min_tracking_confidence,
-        ) as estimator:
-            for t, frame in enumerate(frames):
-                result = estimator.process(frame)
-                xy, c = landmarks_to_arrays(result.pose_landmarks, frames.size, config.min_visibility)
-                joints.append(xy)
-                conf.append(c)
-                if on_frame is not None:
-                    on_frame(t, frame)
+    with PoseEstimator(config) as estimator:
+        for t, frame in enumerate(frames):
+            xy, c = estimator.process(frame)
+            joints.append(xy)
+            conf.append(c)
+            if on_frame is not None:
+                on_frame(t, frame)
     if not joints:
         raise InputError(f"{frames.path}: no frames")
     return PoseTrack(np.stack(joints), np.stack(conf), frames.fps, frames.size, MEDIAPIPE33.name)

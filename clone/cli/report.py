@@ -23,7 +23,7 @@ from clone.cli.progress import extract_if_video, progress_bar
 
 # The primary pose measure first (with ground truth), as on the page; rows a run lacks are left out.
 _HEADLINE = ("pose_rmse_pct", "root_rmse_pct", "facing_share", "ssim_crop", "ssim", "psnr_background",
-             "limb_error_pct", "foot_slide_pct", "jitter_pct", "stage_share")
+             "consistency_pck", "flicker_ratio", "limb_error_pct", "foot_slide_pct", "jitter_pct", "stage_share")
 
 
 @user_errors
@@ -62,6 +62,9 @@ def report_command(
     ] = StageMode.REFERENCE,
     refine_steps: RefineStepsOption = None,
     audio: AudioOption = "auto",
+    consistency: Annotated[bool, typer.Option(
+        "--consistency/--no-consistency", help="Run MediaPipe on every generated frame and measure whether it "
+        "shows the pose it was made from (default; about 20 ms a frame and method on a CPU).")] = True,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.table import Table
@@ -88,7 +91,7 @@ def report_command(
         run = make_report(
             drive_poses, out, model_path=model, gt_poses=gt_poses, gt_frames=gt_frames, overwrite=overwrite,
             device=dev, weights=weights, progress=bar,
-            stage=stage.value, refine_steps=refine_steps, audio=audio,
+            stage=stage.value, refine_steps=refine_steps, audio=audio, consistency=consistency,
         )  # fmt: skip
     table = Table(title=f"{run.frames} frames, {run.seconds:.0f} s")
     table.add_column("measure")

@@ -5,10 +5,12 @@
 - :mod:`~clone.metrics.poses`: limb error, foot skating, jitter, joints outside the image; against ground-truth
   poses the MidHip-aligned pose error (the primary measure), placement and the view check (definitions in
   ``pose_io.compare``, shared with `clone retarget eval`); ``evaluate_track`` runs them on a track.
-- :mod:`~clone.metrics.frames`: SSIM/PSNR of generated frames against the true ones, whole and around the person.
+- :mod:`~clone.metrics.frames`: SSIM/PSNR of generated frames against the true ones, whole and around the person;
+  flicker in the person's box.
+- :mod:`~clone.metrics.consistency`: pose consistency, MediaPipe on generated frames against the driven poses.
 """
 
-from clone.metrics.frames import FrameScorer, frame_pair_scores, frame_scores, person_box
+from clone.metrics.frames import FlickerMeter, FrameScorer, frame_pair_scores, frame_scores, person_box
 from clone.metrics.poses import (
     contact_window,
     evaluate_track,
@@ -25,6 +27,7 @@ from clone.metrics.table import METRICS, MetricInfo, Scores, nan_mean, row_means
 
 __all__ = [
     "METRICS",
+    "FlickerMeter",
     "FrameScorer",
     "MetricInfo",
     "Scores",

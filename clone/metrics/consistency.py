@@ -14,8 +14,42 @@ import numpy as np
 
 from pose_io.compare import pose_error_terms
 from pose_io.errors import InputError
+from pose_io.layouts import MEDIAPIPE33
 from pose_io.measures import skeleton_height
 from pose_io.track import PoseTrack
+
+
+class ConsistencyMeter:
+    """Pose consistency measured as frames are made (a context manager around MediaPipe; memory does not grow
+    with the frames): ``add(frame, driven)`` per frame, ``scores()`` at the end (see :func:`consistency_scores`).
+    """
+
+    def __init__(self) -> None:
+        from pose_io.extract import PoseEstimator
+
+        self._estimator = PoseEstimator()
+        self._found: list[np.ndarray] = []
+        self._driven: list[np.ndarray] = []
+
+    def __enter__(self) -> ConsistencyMeter:  # noqa: PYI034 (typing.Self needs Python 3.11)
+        self._estimator.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._estimator.__exit__(*exc)
+
+    def add(self, frame: np.ndarray, driven: np.ndarray) -> None:
+        """One generated frame ([H, W, 3] uint8 RGB) and the [15, 2] body15 pose it was made from, in its pixels."""
+        joints, confidence = self._estimator.process(frame)
+        found = PoseTrack(joints[None], confidence[None], 30.0, (frame.shape[1], frame.shape[0]), MEDIAPIPE33.name)
+        self._found.append(found.to_layout("body15").joints[0])
+        self._driven.append(np.asarray(driven, dtype=np.float64))
+
+    def scores(self) -> dict[str, float]:
+        """:func:`consistency_scores` of the frames added so far (NaN for none)."""
+        if not self._found:
+            return {"pck_0.1": float("nan"), "median_error_pct": float("nan"), "found_share": float("nan")}
+        return consistency_scores(np.stack(self._found), np.stack(self._driven))
 
 
 def detected_poses(frames: Iterable[np.ndarray], fps: float = 30.0) -> PoseTrack:
@@ -50,7 +84,19 @@ def pose_consistency(frames: Iterable[np.ndarray], driven: np.ndarray, fps: floa
     Returns:
         ``pck_0.1``, ``median_error_pct`` and ``found_share`` (frames where MediaPipe found a person).
     """
-    found = detected_poses(frames, fps).joints  # [T, 15, 2]
+    return consistency_scores(detected_poses(frames, fps).joints, driven)
+
+
+def consistency_scores(found: np.ndarray, driven: np.ndarray) -> dict[str, float]:
+    """PCK@0.1 and median error (% of height) of the poses found in generated frames against those asked for.
+
+    Args:
+        found: [T, 15, 2] body15 poses MediaPipe found (NaN where it found none).
+        driven: [T, 15, 2] the body15 poses the frames were generated from, in the same pixels.
+
+    Returns:
+        ``pck_0.1``, ``median_error_pct`` and ``found_share`` (frames where MediaPipe found a person).
+    """
     driven = np.asarray(driven, dtype=np.float64)
     try:
         height = skeleton_height(driven, "body15")

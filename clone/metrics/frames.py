@@ -1,5 +1,5 @@
 """Measures of generated frames against the true ones: SSIM and PSNR of the whole frame, of the person and of
-the background.
+the background; and of a video on its own: flicker in the person's box (:class:`FlickerMeter`).
 
 Frames are [H, W, 3] uint8 RGB. The person crop is the box of the ground-truth pose plus a margin, so a method
 that puts the person in the wrong place or with the wrong shape scores low there even on a perfect background.
@@ -163,3 +163,34 @@ def frame_scores(
     for pred, gt in zip(pred_frames, gt_frames):
         scorer.add(pred, gt)
     return scorer.scores()
+
+
+class FlickerMeter:
+    """Flicker of a video in the person's box, one frame at a time: the mean absolute change (8-bit levels)
+    between each frame and the one before, inside the box of the later frame's pose. A still person on a
+    still background gives 0; compare a generated video's with the real one's."""
+
+    def __init__(self, margin: float = 0.15) -> None:
+        self.margin = margin
+        self._prev: np.ndarray | None = None
+        self._changes: list[float] = []
+
+    def add(self, frame: np.ndarray, joints: np.ndarray | None) -> None:
+        """The next frame ([H, W, 3] uint8 RGB) and its [J, 2] pose in its pixels (None or all NaN: not measured)."""
+        prev, self._prev = self._prev, frame
+        box = None if prev is None or joints is None else person_box(joints, (frame.shape[1], frame.shape[0]),
+                                                                     self.margin)
+        if box is None or prev.shape != frame.shape:
+            self._changes.append(float("nan"))
+            return
+        x0, y0, x1, y1 = box
+        a, b = prev[y0:y1, x0:x1].astype(np.float32), frame[y0:y1, x0:x1].astype(np.float32)
+        self._changes.append(float(np.abs(a - b).mean()))
+
+    def per_frame(self) -> np.ndarray:
+        """[T] the change into each frame (NaN for the first and where no box was given)."""
+        return np.array(self._changes, dtype=np.float64)
+
+    def value(self) -> float:
+        """The mean change over the frames measured (NaN for none)."""
+        return nan_mean(self.per_frame())

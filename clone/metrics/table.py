@@ -56,6 +56,26 @@ METRICS: dict[str, MetricInfo] = {
     "psnr": MetricInfo(
         "PSNR (frame)", "dB", "higher", "peak signal-to-noise ratio of the whole frame (inf when identical)"
     ),
+    "consistency_pck": MetricInfo(
+        "Pose seen in the frames (PCK@0.1)", "share of joints", "higher",
+        "MediaPipe run on the generated frames against the poses they were made from: share of body15 joints "
+        "it finds within 10 % of the height (a joint it does not find counts as missed); says whether the "
+        "frames show the pose asked for, whatever the pose",
+    ),
+    "consistency_median_pct": MetricInfo(
+        "Pose seen in the frames: median error", "% of height", "lower",
+        "median distance between the joints MediaPipe finds in the generated frames and the driven ones",
+    ),
+    "flicker": MetricInfo(
+        "Flicker (person)", "levels / frame", None,
+        "mean absolute change (8-bit levels) from each generated frame to the next inside the driven pose's "
+        "box plus 15 %: motion and flicker alike, so compare with the true video's (flicker ratio)",
+    ),
+    "flicker_ratio": MetricInfo(
+        "Flicker against the truth", "x the true video's", None,
+        "the flicker above over the true frames' own in the true pose's box: 1 changes as much as the real "
+        "video, above 1 flickers more",
+    ),
     "pose_mse": MetricInfo(
         "Pose MSE (paper)", "height² x 10³", "lower",
         f"the paper's error: mean over frames, joints and both coordinates of ((driven - true) / height)² "

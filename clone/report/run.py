@@ -6,6 +6,7 @@ truth, still images), so memory does not grow with the driver's length.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import time
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from clone.drive.coverage import Coverage, pose_coverage
-from clone.metrics import FrameScorer, Scores, evaluate_track
+from clone.metrics import FlickerMeter, FrameScorer, Scores, evaluate_track
 from clone.model.canvas import image_to_canvas
 from clone.report.folder import check_report_dir, report_dir
 from clone.report.ground_truth import cut_gt_frames, open_gt_frames, read_gt_poses
@@ -31,6 +32,7 @@ from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 
 if TYPE_CHECKING:
+    from clone.metrics.consistency import ConsistencyMeter
     from clone.model.reference import ReferenceModel
 
 log = logging.getLogger(__name__)
@@ -82,16 +84,35 @@ class _Kept:
         scorers: method -> its frame scores against the ground-truth frames (empty without them).
         stills: method -> frame index -> [S, S, 3] uint8 RGB generated frame.
         gt_stills: frame index -> [S, S, 3] uint8 RGB true frame cut to the canvas.
+        bodies: method -> [T, 15, 2] its driven body15 poses in canvas pixels (the boxes flicker is measured in,
+            the poses consistency is measured against).
+        truth_body: [T, 15, 2] the true poses in canvas pixels, or None.
+        flicker: method -> its flicker in the person's box (:class:`clone.metrics.FlickerMeter`).
+        truth_flicker: the true frames' flicker in the true pose's box.
+        consistency: method -> its pose consistency meter (empty when not measured).
     """
 
     at: set[int]
     scorers: dict[str, FrameScorer]
     stills: dict[str, dict[int, np.ndarray]]
     gt_stills: dict[int, np.ndarray] = field(default_factory=dict)
+    bodies: dict[str, np.ndarray] = field(default_factory=dict)
+    truth_body: np.ndarray | None = None
+    flicker: dict[str, FlickerMeter] = field(default_factory=dict)
+    truth_flicker: FlickerMeter = field(default_factory=FlickerMeter)
+    consistency: dict[str, ConsistencyMeter] = field(default_factory=dict)
 
     def add(self, t: int, frames: Mapping[str, np.ndarray], true_frame: np.ndarray | None) -> None:
-        """Score frame ``t`` of every method against the true frame, and keep it when it is a still."""
+        """Score frame ``t`` of every method against the true frame and on its own (flicker, pose consistency
+        when measured), and keep it when it is a still."""
+        for m, frame in frames.items():
+            body = self.bodies[m][t] if m in self.bodies else None
+            self.flicker.setdefault(m, FlickerMeter()).add(frame, body)
+            if m in self.consistency and body is not None:
+                self.consistency[m].add(frame, body)
         if true_frame is not None:
+            has_truth = self.truth_body is not None and t < len(self.truth_body)
+            self.truth_flicker.add(true_frame, self.truth_body[t] if has_truth else None)
             for m, frame in frames.items():
                 self.scorers[m].add(frame, true_frame)
         if t in self.at:
@@ -137,7 +158,9 @@ def _write_video(
     labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)]
     labels += ["Ground truth"] if truth_frames is not None else []
     streams = [generate_frames(model, track, device) for track in driven.values()]
-    with VideoWriter(path, fps=driver.fps, audio=audio) as video:
+    with contextlib.ExitStack() as meters, VideoWriter(path, fps=driver.fps, audio=audio) as video:
+        for meter in kept.consistency.values():
+            meters.enter_context(meter)
         for t, outputs in enumerate(zip(*streams)):
             frames = dict(zip(driven, (frame for _pose_map, frame in outputs)))  # [S, S, 3] uint8 each
             true_frame = None if truth_frames is None else next(truth_frames)
@@ -176,11 +199,22 @@ def _method_results(
     at = sorted(kept.at)
     methods = {}
     coverage = {} if coverage is None else coverage
+    truth_flicker = kept.truth_flicker.value()
     for m, detailed in driven.items():
         track = detailed.to_layout(BODY15.name)  # measured and drawn as the network's joints
         scores = evaluate_track(track, *reference, truth)
         if m in kept.scorers:
             scores = scores.merged(kept.scorers[m].scores())
+        if m in kept.flicker:
+            flicker = kept.flicker[m]
+            summary = {"flicker": flicker.value()}
+            if np.isfinite(truth_flicker) and truth_flicker > 0:
+                summary["flicker_ratio"] = flicker.value() / truth_flicker
+            scores = scores.merged(Scores(per_frame={"flicker": flicker.per_frame()}, summary=summary))
+        if m in kept.consistency:
+            found = kept.consistency[m].scores()
+            scores = scores.merged(Scores(summary={"consistency_pck": found["pck_0.1"],
+                                                   "consistency_median_pct": found["median_error_pct"]}))
         if m in shares:
             scores = scores.merged(Scores(summary={"stage_share": float(shares[m])}))
         cover = pose_coverage(track, model.reference_track)
@@ -246,6 +280,7 @@ def make_report(
     stage: str = "reference",
     refine_steps: int | None = None,
     audio: str | os.PathLike | None = "auto",
+    consistency: bool = True,
 ) -> ReportRun:
     """Drive the reference model with both methods, measure them and write the report folder.
 
@@ -264,6 +299,8 @@ def make_report(
         refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
         audio: the video's sound: ``auto`` the driver's when it is a video with sound, ``none`` silent, else a
             file (see :func:`pose_io.audio.resolve_audio`).
+        consistency: measure pose consistency, MediaPipe run on every generated frame against the poses it was
+            made from (:mod:`clone.metrics.consistency`; about 20 ms a frame and method on a CPU).
 
     Returns:
         Where the page is and the summary numbers.
@@ -289,6 +326,13 @@ def make_report(
     truth_canvas = None if truth is None else image_to_canvas(truth.joints, canvas)  # [T, J, 2] canvas px
     scorers = {m: FrameScorer(truth_canvas) for m in driven} if truth_frames is not None else {}
     kept = _Kept(set(still_indices(total)), scorers, {m: {} for m in driven})
+    kept.bodies = {m: image_to_canvas(t.to_layout(BODY15.name).joints, canvas) for m, t in driven.items()}
+    if truth_canvas is not None and truth is not None:
+        kept.truth_body = image_to_canvas(truth.to_layout(BODY15.name).joints, canvas)
+    if consistency:
+        from clone.metrics.consistency import ConsistencyMeter
+
+        kept.consistency = {m: ConsistencyMeter() for m in driven}
 
     with report_dir(out_dir, overwrite) as folder:
         cut = None if truth_frames is None else cut_gt_frames(truth_frames, gt_frames, total, canvas)

@@ -33,3 +33,18 @@ def test_a_frame_without_a_person_misses_every_joint():
     asked = np.concatenate([found, found])
     result = pose_consistency(frames, asked)
     assert result["found_share"] == 0.5 and result["pck_0.1"] <= 0.5 + 1e-9
+
+
+def test_the_meter_measures_frame_by_frame_as_the_whole_list_does():
+    from clone.metrics.consistency import ConsistencyMeter
+
+    frames = astronaut_frames(3)
+    found = detected_poses(frames).joints
+    moved = found.copy()
+    moved[1:, :, 0] += 200
+    with ConsistencyMeter() as meter:
+        for frame, asked in zip(frames, moved):
+            meter.add(frame, asked)
+    assert meter.scores() == pose_consistency(frames, moved)
+    with ConsistencyMeter() as empty:
+        assert np.isnan(empty.scores()["pck_0.1"])

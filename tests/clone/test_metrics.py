@@ -240,3 +240,23 @@ def test_limb_never_seen_in_reference_is_left_out():
     per_frame, _ = metrics.limb_error(stand(3), ref, HEIGHT)
     np.testing.assert_allclose(per_frame, 0.0)
 
+
+
+def test_flicker_is_the_mean_change_inside_the_pose_box():
+    from clone.metrics import FlickerMeter
+
+    pose = np.array([[10.0, 10.0], [20.0, 30.0]])  # box x 7-23, y 7-33 with the 15 % margin
+    still = np.zeros((40, 40, 3), np.uint8)
+    lit = still.copy()
+    lit[:, :] = 30  # every pixel changes by 30 levels
+    outside = still.copy()
+    outside[:, 30:] = 200  # only outside the box
+    meter = FlickerMeter()
+    for frame in (still, lit, lit, outside):
+        meter.add(frame, pose)
+    per_frame = meter.per_frame()
+    assert np.isnan(per_frame[0])
+    np.testing.assert_allclose(per_frame[1:], [30.0, 0.0, 30.0])  # back to black inside the box
+    assert meter.value() == pytest.approx(20.0)
+    meter.add(still, None)  # no pose: not measured
+    assert np.isnan(meter.per_frame()[-1]) and meter.value() == pytest.approx(20.0)

@@ -67,8 +67,15 @@ def test_cli_report_and_ground_truth_mismatches(tmp_path, tiny_models):
     assert "wrote" in result.output and (tmp_path / "a" / "report.html").is_file()
     doc = json.loads((tmp_path / "a" / "metrics.json").read_text())
     assert doc["ground_truth"] is None and "ssim" not in doc["methods"]["retarget"]["summary"]
+    summary = doc["methods"]["retarget"]["summary"]
+    # measured without ground truth: flicker, and what MediaPipe sees in the frames; no ratio to a truth
+    assert summary["flicker"] >= 0.0 and "consistency_pck" in summary and "flicker_ratio" not in summary
     result = runner.invoke(app, [*base, "--out", str(tmp_path / "a")])
     assert result.exit_code == 2 and "--overwrite" in result.output
+    result = runner.invoke(app, [*base, "--out", str(tmp_path / "c"), "--no-consistency"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "c" / "metrics.json").read_text())["methods"]["retarget"]["summary"]
+    assert "consistency_pck" not in summary and "flicker" in summary
 
     # with ground truth, the printed table leads with the MidHip-aligned pose error, as the page does
     good = tmp_path / "good"
