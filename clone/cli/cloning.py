@@ -88,9 +88,9 @@ def train_ref(
         "choice.")] = None,
     face_pass: Annotated[bool | None, typer.Option(
         "--face-pass/--no-face-pass", help="Train a face pass beside the generator: a small network on the face's "
-        "crop that sharpens it, run by `clone drive` (default with detailed pose maps). Measured at 10 minutes "
-        "on a real reference: face SSIM 0.867 against 0.692, the person's box 0.914 against 0.910. When "
-        "resuming, the stored choice.")] = None,
+        "crop that sharpens it, run by `clone drive` (default from --size 256 up, with detailed pose maps). "
+        "Measured at 10 minutes on a real reference: face SSIM 0.867 against 0.692, the person's box 0.914 "
+        "against 0.910. When resuming, the stored choice.")] = None,
     face_gan: Annotated[float | None, typer.Option(
         "--face-gan", min=0.0, max=100.0, help="Weight of a second discriminator on the face (training only; "
         "detailed pose maps). Measured at 10 minutes on a real reference, without the face pass: face SSIM 0.768 "
@@ -174,7 +174,7 @@ def train_ref(
         config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or per_process,
                              background=background is not False,
                              pose_layout="body15" if details is False else "body31",
-                             face_pass=details is not False and face_pass is not False,
+                             face_pass=False if details is False else face_pass,
                              loss=LossConfig(face_gan=face_gan or 0.0))
 
     with distributed.launched(dev) as dev, \

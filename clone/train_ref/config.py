@@ -89,8 +89,8 @@ class TrainConfig:
         plate: how the plate is estimated.
         face_pass: train a face pass beside the generator (:mod:`clone.model.face`: a small U-Net on the face's
             crop adding a residual, as Everybody Dance Now's face GAN, with its own discriminator), stored in the
-            model and run by `clone drive`. Body31 pose maps only (off with body15); a reference whose poses
-            have no face points trains none.
+            model and run by `clone drive`. None: on from 256² canvases up. Body31 pose maps only (off with
+            body15); a reference whose poses have no face points trains none.
         pose_layout: what the pose maps show: ``body31`` (body15 with the face, hands and feet, front and back
             told apart, :mod:`clone.model.detail_map`) or ``body15`` (the skeleton alone, as models before it).
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
@@ -129,8 +129,9 @@ class TrainConfig:
     background: bool = True
     plate_input: bool = False
     plate: PlateConfig = field(default_factory=PlateConfig)
-    # Measured on real footage (docs/cloning.md, "The face pass"): 10 minutes, face SSIM 0.867 against 0.692.
-    face_pass: bool = True
+    # None: on from 256² up with body31 maps, where it was measured on real footage (docs/cloning.md, "The face
+    # pass": 10 minutes, face SSIM 0.867 against 0.692), off below (fixed in __post_init__).
+    face_pass: bool | None = None
     pose_layout: str = "body31"
     min_visible_joints: int = 10
     steps: int = 2000
@@ -150,6 +151,8 @@ class TrainConfig:
         object.__setattr__(self, "prev_source", source)
         if self.pose_layout not in POSE_LAYOUTS:
             raise ValueError(f"unknown pose_layout {self.pose_layout!r}; valid: {', '.join(POSE_LAYOUTS)}")
+        if self.face_pass is None:
+            object.__setattr__(self, "face_pass", self.size >= 256)
         if self.pose_layout == "body15":  # no face points to find the face by
             object.__setattr__(self, "face_pass", False)
         if self.base_channels is None:

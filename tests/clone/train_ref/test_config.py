@@ -51,3 +51,14 @@ def test_the_learning_rate_falls_linearly_over_the_runs_last_part():
     stored = TrainConfig().to_dict()
     del stored["lr_decay_from"]  # a model trained before the schedule resumes with a constant rate
     assert TrainConfig.from_dict(stored).lr_decay_from == 1.0
+
+
+def test_the_face_pass_is_on_from_256_up_with_detailed_maps_and_older_runs_had_none():
+    assert TrainConfig(size=256).face_pass and not TrainConfig(size=128).face_pass
+    assert TrainConfig(size=64, face_pass=True).face_pass
+    assert not TrainConfig(size=256, pose_layout="body15").face_pass
+    assert not TrainConfig(size=256, face_pass=False).face_pass
+    stored = TrainConfig(size=256).to_dict()
+    assert TrainConfig.from_dict(stored).face_pass
+    del stored["face_pass"]
+    assert not TrainConfig.from_dict(stored).face_pass
