@@ -30,6 +30,8 @@ from retarget.inference.windows import pad_to_multiple, run_windowed, strided_st
 from retarget.network.config import min_frames
 from retarget.network.preprocess import (
     LAYOUT,
+    LOCAL_JOINTS,
+    NUM_ROWS,
     NormStats,
     PreprocessConfig,
     channels_to_joints,
@@ -38,6 +40,48 @@ from retarget.network.preprocess import (
 
 _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses
 
+
+
+# A window faces the camera (or shows its back) when its shoulders are this share of its torso's length apart.
+FACING_WIDTH = 0.3
+
+
+def window_facing(windows: np.ndarray, stats: NormStats) -> np.ndarray:
+    """[N] +1 where a window [N, 30, L] of network input faces the camera, -1 where it shows its back, 0 between:
+    the sign of its median shoulder width over its torso's length (the right shoulder on the image's left when
+    facing it) beyond ``FACING_WIDTH``."""
+    n, _, length = windows.shape
+    rows = windows.reshape(n, NUM_ROWS, 2, length) * stats.std[None, :, :, None] + stats.mean[None, :, :, None]
+    right, left, neck = (LOCAL_JOINTS.index(name) for name in ("r_shoulder", "l_shoulder", "neck"))
+    torso = np.hypot(rows[:, neck, 0], rows[:, neck, 1])  # [N, L] the neck from the root (MidHip)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        width = np.nanmedian((rows[:, left, 0] - rows[:, right, 0]) / torso, axis=1)  # [N]
+    return np.where(width > FACING_WIDTH, 1, np.where(width < -FACING_WIDTH, -1, 0))
+
+
+def pool_view_codes(codes: np.ndarray, pool: str, facing: np.ndarray | None = None) -> np.ndarray:
+    """One view code [C] from a reference's window codes [N, C] (``InferenceConfig.view_pool``).
+
+    ``mean``: their mean. ``nearest``: the window code nearest their mean. ``facing``: the same, over the windows
+    that face the way most of them do when the reference shows both her front and her back (``facing`` [N], see
+    :func:`window_facing`), over all of them otherwise: the mean of front and back codes is a side view's.
+    ``dominant``: the window code nearest the mean of the half of the windows nearest their medoid.
+    """
+    codes = np.asarray(codes, dtype=np.float64)
+    if pool == "mean":
+        return codes.mean(axis=0).astype(np.float32)
+    kept = codes
+    if pool == "facing" and facing is not None and (facing > 0).any() and (facing < 0).any():
+        side = 1 if (facing > 0).sum() >= (facing < 0).sum() else -1
+        kept = codes[facing == side]
+    elif pool == "dominant":
+        dist = np.sqrt(((codes[:, None] - codes[None]) ** 2).sum(axis=-1))  # [N, N]
+        medoid = int(np.argmin(dist.sum(axis=1)))
+        kept = codes[np.argsort(dist[medoid], kind="stable")[: max(2, (len(codes) + 1) // 2)]]
+    if len(kept) < 3:
+        return kept.mean(axis=0).astype(np.float32)
+    mean = kept.mean(axis=0)
+    return kept[int(np.argmin(((kept - mean) ** 2).sum(axis=1)))].astype(np.float32)
 
 class RetargeterBase:
     """What both backends do the same way; a backend supplies ``model`` and runs the network on numpy arrays.
@@ -198,8 +242,8 @@ class RetargeterBase:
         return resample(track, fps, frames=motion.frames)
 
     def _static_code(self, x: np.ndarray, which: str) -> np.ndarray:
-        """[30, T] -> [C] code over windows of ``code_window`` frames: their mean, or for the view code with
-        ``view_pool="nearest"`` and three windows or more the window code nearest that mean."""
+        """[30, T] -> [C] code over windows of ``code_window`` frames: their mean, or for the view code of three
+        windows or more as ``config.view_pool`` says (:func:`pool_view_codes`)."""
         length, window = x.shape[-1], self.config.code_window
         if length < window:
             windows = pad_to_multiple(x, 8)[0][None]  # [1, 30, T8]
@@ -209,10 +253,9 @@ class RetargeterBase:
         batch = self.config.batch
         codes = np.concatenate([self._encode_static(windows[i : i + batch], which)
                                 for i in range(0, len(windows), batch)])  # fmt: skip  # [N, C]
-        mean = codes.mean(axis=0)
-        if which == "view" and self.config.view_pool == "nearest" and len(codes) >= 3:
-            return codes[int(np.argmin(((codes - mean) ** 2).sum(axis=1)))].astype(np.float32)
-        return mean.astype(np.float32)
+        if which == "view" and len(codes) >= 3:
+            return pool_view_codes(codes, self.config.view_pool, window_facing(windows, self.stats))
+        return codes.mean(axis=0).astype(np.float32)
 
     def _reference_scale(self, reference: ReferenceCodes) -> float:
         if reference.scale is not None:

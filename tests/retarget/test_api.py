@@ -244,3 +244,34 @@ def test_a_high_rate_track_too_short_at_the_networks_rate_is_refused(retargeter,
     for bad in (-1.0, float("nan"), float("inf"), 1e-5, 5000.0):
         with pytest.raises(ValueError, match="fps must be 0 or from 0.01 to 1000"):
             InferenceConfig(fps=bad)
+
+
+def _facing_windows(signs: list[int], stats) -> np.ndarray:
+    """[N, 30, 64] network input of a standing body facing the camera (+1), showing its back (-1) or its side (0)."""
+    from retarget.network.preprocess import LOCAL_JOINTS, NUM_ROWS
+
+    rows = np.zeros((len(signs), NUM_ROWS, 2, 64))
+    for k, sign in enumerate(signs):
+        rows[k, LOCAL_JOINTS.index("neck"), 1] = -50.0  # the neck 50 px above the MidHip
+        rows[k, LOCAL_JOINTS.index("r_shoulder"), 0] = -15.0 * sign  # facing: the right shoulder on the left
+        rows[k, LOCAL_JOINTS.index("l_shoulder"), 0] = 15.0 * sign
+    return ((rows - stats.mean[None, :, :, None]) / stats.std[None, :, :, None]).reshape(len(signs), 30, 64)
+
+
+def test_a_reference_who_shows_her_back_gets_the_view_she_shows_most(retargeter):
+    from retarget.inference.algorithm import pool_view_codes, window_facing
+
+    signs = [1, 1, 1, 0, -1, -1, 1, 1]
+    assert window_facing(_facing_windows(signs, retargeter.stats), retargeter.stats).tolist() == signs
+    rng = np.random.default_rng(0)
+    front, back = rng.normal(size=8), rng.normal(size=8) + 3.0
+    codes = np.stack([front + 0.1 * rng.normal(size=8) if s > 0 else back if s < 0 else (front + back) / 2
+                      for s in signs])
+    facing = np.array(signs)
+    chosen = pool_view_codes(codes, "facing", facing)
+    fronts = codes[facing == 1]
+    np.testing.assert_allclose(chosen, fronts[np.argmin(((fronts - fronts.mean(0)) ** 2).sum(1))], rtol=1e-6)
+    # never turning: the window nearest the mean of all, as "nearest"
+    same = np.ones(len(signs), dtype=int)
+    np.testing.assert_array_equal(pool_view_codes(codes, "facing", same), pool_view_codes(codes, "nearest"))
+    assert InferenceConfig().view_pool == "facing"
