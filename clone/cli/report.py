@@ -62,9 +62,10 @@ def report_command(
     ] = StageMode.REFERENCE,
     refine_steps: RefineStepsOption = None,
     audio: AudioOption = "auto",
-    consistency: Annotated[bool, typer.Option(
+    consistency: Annotated[bool | None, typer.Option(
         "--consistency/--no-consistency", help="Run MediaPipe on every generated frame and measure whether it "
-        "shows the pose it was made from (default; about 20 ms a frame and method on a CPU).")] = True,
+        "shows the pose it was made from (default when MediaPipe is installed; about 20 ms a frame and method "
+        "on a CPU).")] = None,
 ) -> None:
     """Compare global scaling and retargeting on one driver: side-by-side video, measures, plots, one page."""
     from rich.table import Table

@@ -92,16 +92,20 @@ def retarget_onto(
 ) -> PoseTrack:
     """The driver's motion performed by the reference, in the reference's pixels (retargeting network).
 
-    Uses the codes stored in the model when the same weights made them; otherwise computes them from the
-    reference track stored in the model. ``refine_steps``: motion-code refinement steps (None: inference's
+    Uses the codes stored in the model when the same weights made them, pooled as today's inference pools
+    them (``view_pool``); otherwise computes them from the reference track stored in the model. ``refine_steps``: motion-code refinement steps (None: inference's
     default; 0: the encoder's codes as they are, on the numpy backend when the weights have an export).
     """
     from retarget.api import ReferenceCodes
 
     path = retargeting_weights(model, weights)
     retargeter = load_driving_retargeter(path, device, refine_steps)
-    if model.reference_codes is not None and file_sha256(path) == model.codes_weights:
-        codes = ReferenceCodes.from_dict(model.reference_codes)
+    stored = model.reference_codes
+    # codes stored by the same weights and pooled as today (models trained before the view code's "facing"
+    # pool store none: a reference who turned her back got a side view's code)
+    if stored is not None and file_sha256(path) == model.codes_weights \
+            and stored.get("view_pool") == retargeter.config.view_pool:
+        codes = ReferenceCodes.from_dict(stored)
     else:
         log.info("computing the reference's codes from its stored track with %s", path)
         codes = retargeter.reference_codes(model.reference_track)

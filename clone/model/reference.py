@@ -20,8 +20,8 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
   generator. Files without it drive as before.
 - ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
   the weights: ``steps``, ``seconds``, ``device``, ``config`` (the ``TrainConfig`` as a dict), ``trainer``
-  (discriminator, both optimisers, step) and ``rng`` (the run's random state). A file without it drives as
-  well but cannot be resumed.
+  (discriminator, both optimisers, step; the face pass's optimiser and discriminator) and ``rng`` (the run's
+  random state). A file without it drives as well but cannot be resumed.
 
 Format versions: 3 adds ``background``; 2 keeps the training state in the file under ``training``; 1 kept only the record there
 (steps, seconds, config, device), with the state in a sibling ``<model>.state`` file. Version 1 files still

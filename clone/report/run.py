@@ -7,6 +7,7 @@ truth, still images), so memory does not grow with the driver's length.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import logging
 import os
 import time
@@ -157,10 +158,12 @@ def _write_video(
     height = _panel_height(model.canvas.size)
     labels = ["Driver", *(REPORT_METHODS[m][0] for m in driven)]
     labels += ["Ground truth"] if truth_frames is not None else []
-    streams = [generate_frames(model, track, device) for track in driven.values()]
-    with contextlib.ExitStack() as meters, VideoWriter(path, fps=driver.fps, audio=audio) as video:
+    with contextlib.ExitStack() as open_, VideoWriter(path, fps=driver.fps, audio=audio) as video:
+        # every stream closed when the video ends or fails (each holds its drawing and face-pass threads)
+        streams = [open_.enter_context(contextlib.closing(generate_frames(model, track, device)))
+                   for track in driven.values()]
         for meter in kept.consistency.values():
-            meters.enter_context(meter)
+            open_.enter_context(meter)
         for t, outputs in enumerate(zip(*streams)):
             frames = dict(zip(driven, (frame for _pose_map, frame in outputs)))  # [S, S, 3] uint8 each
             true_frame = None if truth_frames is None else next(truth_frames)
@@ -280,7 +283,7 @@ def make_report(
     stage: str = "reference",
     refine_steps: int | None = None,
     audio: str | os.PathLike | None = "auto",
-    consistency: bool = True,
+    consistency: bool | None = None,
 ) -> ReportRun:
     """Drive the reference model with both methods, measure them and write the report folder.
 
@@ -300,7 +303,8 @@ def make_report(
         audio: the video's sound: ``auto`` the driver's when it is a video with sound, ``none`` silent, else a
             file (see :func:`pose_io.audio.resolve_audio`).
         consistency: measure pose consistency, MediaPipe run on every generated frame against the poses it was
-            made from (:mod:`clone.metrics.consistency`; about 20 ms a frame and method on a CPU).
+            made from (:mod:`clone.metrics.consistency`; about 20 ms a frame and method on a CPU); None: when
+            MediaPipe is installed (the ``extract`` extra).
 
     Returns:
         Where the page is and the summary numbers.
@@ -329,6 +333,10 @@ def make_report(
     kept.bodies = {m: image_to_canvas(t.to_layout(BODY15.name).joints, canvas) for m, t in driven.items()}
     if truth_canvas is not None and truth is not None:
         kept.truth_body = image_to_canvas(truth.to_layout(BODY15.name).joints, canvas)
+    if consistency is None:
+        consistency = importlib.util.find_spec("mediapipe") is not None
+        if not consistency:
+            log.info("MediaPipe is not installed: no pose consistency in the report")
     if consistency:
         from clone.metrics.consistency import ConsistencyMeter
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import closing
 from typing import Any
 
 import numpy as np
@@ -75,9 +76,10 @@ def generate_frames(
 
     Pose maps are drawn (in a background thread, :func:`draw_pose_maps`) and moved to the device ``chunk``
     frames at a time; a temporal generator then runs frame after frame on its own previous output (each
-    frame yielded as soon as it is made), a non-temporal one on the whole chunk. A generator trained with a
-    background plate composites its frames over the plate stored in the model; a model with a face pass
-    (:mod:`clone.model.face`) has each frame's face refined before it is yielded.
+    frame yielded as soon as it is made, or with a face pass once the next one is under way), a non-temporal
+    one on the whole chunk. A generator trained with a background plate composites its frames over the plate
+    stored in the model; a model with a face pass (:mod:`clone.model.face`) has each frame's face refined
+    before it is yielded.
 
     Args:
         model: the reference model.
@@ -92,25 +94,26 @@ def generate_frames(
     device = torch.device(device)
     net = build_drive_generator(model, device, runtime)
     face_pass = build_drive_face_pass(model, device, runtime)
-    frames = _generator_frames(model, net, track, device, chunk)
-    if face_pass is None:
-        for pose_map, _pose, frame in frames:
-            with torch.inference_mode():
-                image = to_images(frame)[0]  # [S, S, 3]
-            yield pose_map, image
-        return
-    # The face pass of frame t runs in a thread while the generator makes frame t + 1 (it needs the
-    # generator's own frame t, not the refined one): on 2 cores it then costs little of the drive's speed.
-    centres = torch.from_numpy(_face_centres(model, track)).to(device)  # [T, 2] canvas pixels
-    with ThreadPoolExecutor(1, thread_name_prefix="face-pass") as pool:
-        pending = None
-        for t, (pose_map, pose, frame) in enumerate(frames):
-            job = pool.submit(_refined, face_pass, pose_map, pose, frame, centres[t:t + 1])
+    # closed with this generator, so that its drawing thread stops when the caller stops early
+    with closing(_generator_frames(model, net, track, device, chunk)) as frames:
+        if face_pass is None:
+            for pose_map, _pose, frame in frames:
+                with torch.inference_mode():
+                    image = to_images(frame)[0]  # [S, S, 3]
+                yield pose_map, image
+            return
+        # The face pass of frame t runs in a thread while the generator makes frame t + 1 (it needs the
+        # generator's own frame t, not the refined one): on 2 cores it then costs little of the drive's speed.
+        centres = torch.from_numpy(_face_centres(model, track)).to(device)  # [T, 2] canvas pixels
+        with ThreadPoolExecutor(1, thread_name_prefix="face-pass") as pool:
+            pending = None
+            for t, (pose_map, pose, frame) in enumerate(frames):
+                job = pool.submit(_refined, face_pass, pose_map, pose, frame, centres[t:t + 1])
+                if pending is not None:
+                    yield pending.result()
+                pending = job
             if pending is not None:
                 yield pending.result()
-            pending = job
-        if pending is not None:
-            yield pending.result()
 
 
 def _generator_frames(

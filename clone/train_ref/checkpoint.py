@@ -2,7 +2,8 @@
 ``training``, everything a resumed run needs, written atomically together.
 
 ``training`` holds the run's record (``steps``, ``seconds``, ``device``, ``config``) and its resume state:
-``trainer`` (:meth:`Trainer.state_dict`: discriminator, both optimisers, step) and ``rng`` (the state of the
+``trainer`` (:meth:`Trainer.state_dict`: discriminator, both optimisers, step, and the face pass's optimiser,
+discriminator and its optimiser when the run trains one; the face pass's weights are the model's ``face_pass``) and ``rng`` (the state of the
 run's CPU generator, which picks samples and draws the augmentation). Since nothing lives beside the model,
 the state of one model cannot be resumed with the weights of another.
 

@@ -218,13 +218,16 @@ def reference_codes(
         return None, None, None
     path = Path(weights) if weights is not None else PACKAGED_WEIGHTS
     try:
-        codes = load_retargeter(path, device="cpu").reference_codes(track)
+        retargeter = load_retargeter(path, device="cpu")
+        codes = retargeter.reference_codes(track)
     except InputError as exc:
         if weights is not None:
             raise
         log.warning("reference codes: %s; storing none", exc)
         return None, None, None
-    return codes.to_dict(), file_sha256(path), str(path.resolve())
+    # how the view code was pooled: `clone drive` recomputes codes pooled otherwise
+    stored = {**codes.to_dict(), "view_pool": retargeter.config.view_pool}
+    return stored, file_sha256(path), str(path.resolve())
 
 
 def maybe_scale_stats(track: PoseTrack) -> ScaleStats | None:

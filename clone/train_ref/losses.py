@@ -29,7 +29,7 @@ def person_weights(real: Tensor, plate: Tensor | None, pose: Tensor, extra: floa
         plate: [B, 3, S, S] their (warped) background plates, or None.
         pose: [B, 3, S, S] their pose maps (-1 where nothing is drawn).
         extra: the person's extra weight (0: all ones).
-        face: [B, 1, S, S] the face's disc (:func:`clone.train_ref.data.face_mask`, warped), or None.
+        face: [B, 1, S, S] the face's disc (:func:`clone.model.face.face_mask`, warped), or None.
         face_extra: the face's extra weight on top of the person's.
 
     Returns:

@@ -293,7 +293,8 @@ class Trainer:
                 "face_pass_d": loss_d.detach()}
 
     def state_dict(self) -> dict[str, Any]:
-        """What resuming needs besides G's weights: D (and the face D), the optimisers and the step."""
+        """What resuming needs besides G's weights (and the face pass's, stored as the model's ``face_pass``): D,
+        the face D and the face pass's D when there are, every optimiser and the step."""
         state = {
             "discriminator": {"name": "patch", "config": self.d.config.to_dict(), "state_dict": self.d.state_dict()},
             "opt_g": self.opt_g.state_dict(),

@@ -41,7 +41,6 @@ from retarget.network.preprocess import (
 _min_frames = functools.lru_cache(maxsize=8)(min_frames)  # configs are frozen (hashable) dataclasses
 
 
-
 # A window faces the camera (or shows its back) when its shoulders are this share of its torso's length apart.
 FACING_WIDTH = 0.3
 
@@ -82,6 +81,7 @@ def pool_view_codes(codes: np.ndarray, pool: str, facing: np.ndarray | None = No
         return kept.mean(axis=0).astype(np.float32)
     mean = kept.mean(axis=0)
     return kept[int(np.argmin(((kept - mean) ** 2).sum(axis=1)))].astype(np.float32)
+
 
 class RetargeterBase:
     """What both backends do the same way; a backend supplies ``model`` and runs the network on numpy arrays.

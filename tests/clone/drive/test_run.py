@@ -335,3 +335,34 @@ def test_a_face_pass_changes_the_face_only_and_not_the_frames_after(trained):
         half = FACE_PASS_RADII * radius + 1.5
         assert (np.abs(xs - nose[t, 0]) <= half).all() and (np.abs(ys - nose[t, 1]) <= half).all()
     assert changed > 0
+
+
+def test_codes_stored_with_another_view_pooling_are_computed_again(tmp_path, monkeypatch):
+    """Models trained before the 'facing' view pool store codes without saying how they were pooled: driving
+    them computes the codes again from the stored track, as it does for other weights."""
+    from dataclasses import replace
+
+    from clone.drive.poses import retarget_onto
+
+    poses, frames = write_reference(tmp_path / "ref", figure_track(64))
+    model_path = tmp_path / "ref.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, model_path)).exit_code == 0
+    model = load_reference_model(model_path)
+    assert model.reference_codes["view_pool"] == "facing"
+    driver = figure_track(40)
+    computed = []
+    from retarget.inference.algorithm import RetargeterBase
+
+    original = RetargeterBase.reference_codes
+
+    def counting(self, *args, **kwargs):
+        computed.append(1)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(RetargeterBase, "reference_codes", counting)
+    same = retarget_onto(driver, model, None)
+    assert not computed  # stored codes pooled as today's: used as they are
+    old = replace(model, reference_codes={k: v for k, v in model.reference_codes.items() if k != "view_pool"})
+    again = retarget_onto(driver, old, None)
+    assert computed  # recomputed; on this figure (never turning) to the same poses
+    np.testing.assert_allclose(again.joints, same.joints, atol=1e-3)
