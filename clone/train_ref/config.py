@@ -21,6 +21,9 @@ class AugmentConfig:
         translate: largest shift as a fraction of the canvas.
         prev_jitter: largest relative brightness/contrast/saturation change of the previous-frame input.
         prev_noise: standard deviation of Gaussian noise on the previous-frame input ([-1, 1] units).
+        pose_jitter: standard deviation of Gaussian noise added to every joint of the pose maps G and D see (not
+            to the frames), as a share of the reference's standing height (0: none): the same frame under
+            slightly different poses, so that poses the reference never made map to her look.
     """
 
     rotation_deg: float = 3.0
@@ -28,6 +31,7 @@ class AugmentConfig:
     translate: float = 0.03
     prev_jitter: float = 0.1
     prev_noise: float = 0.03
+    pose_jitter: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,8 @@ from clone.model.face import face_mask, face_radius
 from clone.model.reference import LAYOUT, file_sha256
 from clone.model.tensors import to_tensor
 from pose_io.errors import InputError
-from pose_io.layouts import get_layout
-from pose_io.measures import reference_limb_lengths
+from pose_io.layouts import BODY15, JointLayout, get_layout
+from pose_io.measures import reference_limb_lengths, skeleton_height
 from pose_io.track import PoseTrack
 from retarget.baselines.global_scale import ScaleStats, scale_stats
 
@@ -57,6 +57,7 @@ class ReferenceData:
         layout: the joints' layout (body15, or body31 with the details).
         face_radius: radius of the face's disc each batch carries as ``face`` (:func:`face_mask`), or None: no
             face points, or ``faces=False`` (no loss uses it).
+        height: the body's standing height in canvas pixels, or None (the scale of ``AugmentConfig.pose_jitter``).
     """
 
     def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int,
@@ -70,15 +71,18 @@ class ReferenceData:
         self.indices = np.flatnonzero(usable)
         # The face's disc only where a loss uses it (it is drawn and warped with every sample).
         self.face_radius = face_radius(joints, self.layout) if faces else None
+        self.height = _standing_height(joints, self.layout)
 
-    def pose_map(self, i: int) -> np.ndarray:
-        """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0)."""
+    def pose_map(self, i: int, offset: np.ndarray | None = None) -> np.ndarray:
+        """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0), its joints moved by ``offset`` [J, 2]."""
         if i < 0:
             return np.zeros((self.size, self.size, 3), dtype=np.uint8)
-        return render_pose_map(self.joints[i], self.size, self.layout)
+        joints = self.joints[i] if offset is None else self.joints[i] + offset
+        return render_pose_map(joints, self.size, self.layout)
 
-    def batch(self, idx: np.ndarray) -> dict[str, Tensor]:
-        """Tensors for frames ``idx`` and their predecessors.
+    def batch(self, idx: np.ndarray, offsets: np.ndarray | None = None) -> dict[str, Tensor]:
+        """Tensors for frames ``idx`` and their predecessors; ``offsets`` [B, J, 2] moves the joints of sample
+        b's two pose maps (not its frames or face disc) by ``offsets[b]`` canvas pixels.
 
         Returns:
             ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
@@ -90,9 +94,10 @@ class ReferenceData:
         has_prev = torch.from_numpy(prev >= 0)
         frame_prev = to_tensor(np.stack([self.frames[p] if p >= 0 else zero for p in prev]))
         frame_prev[~has_prev] = 0.0
+        moved = [None] * len(idx) if offsets is None else list(offsets)
         sample = {
-            "pose_prev": to_tensor(np.stack([self.pose_map(int(p)) for p in prev])),
-            "pose_cur": to_tensor(np.stack([self.pose_map(int(i)) for i in idx])),
+            "pose_prev": to_tensor(np.stack([self.pose_map(int(p), o) for p, o in zip(prev, moved)])),
+            "pose_cur": to_tensor(np.stack([self.pose_map(int(i), o) for i, o in zip(idx, moved)])),
             "frame_prev": frame_prev,
             "frame_cur": to_tensor(np.stack([self.frames[i] for i in idx])),
             "has_prev": has_prev,
@@ -103,6 +108,16 @@ class ReferenceData:
             faces = np.stack([face_mask(self.joints[i], self.layout, self.face_radius, self.size) for i in idx])
             sample["face"] = torch.from_numpy(faces[:, None].astype(np.float32))  # [B, 1, S, S]
         return sample
+
+
+def _standing_height(joints: np.ndarray, layout: JointLayout) -> float | None:
+    """The body's standing height in canvas pixels (body15 joints), or None when the track gives none."""
+    body = joints[:, : len(BODY15.joints)] if layout.name != "body15" else joints
+    try:
+        height = skeleton_height(body, "body15")
+    except InputError:
+        return None
+    return float(height) if np.isfinite(height) and height > 0 else None
 
 
 def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:

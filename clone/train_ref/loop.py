@@ -304,7 +304,11 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     part = slice(0, total) if run.part is None else run.part
     pick = torch.randint(len(data.indices), (total,), generator=rng).numpy()
     matrices = random_affines(total, data.size, config.augment, rng)  # [total, 2, 3]
-    sample = warp_batch(data.batch(data.indices[pick[part]]), matrices[part])
+    offsets = None
+    if config.augment.pose_jitter and data.height:  # drawn only when asked, so runs without it draw as before
+        noise = torch.randn(total, data.joints.shape[1], 2, generator=rng).numpy()  # [total, J, 2]
+        offsets = (noise * config.augment.pose_jitter * data.height)[part]
+    sample = warp_batch(data.batch(data.indices[pick[part]], offsets), matrices[part])
     pin = trainer.device.type == "cuda"
     sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
     prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)

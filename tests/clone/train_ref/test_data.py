@@ -83,3 +83,26 @@ def test_reference_codes_are_stored_with_retargeting_weights(tmp_path):
     assert model.reference_codes is not None and model.reference_codes["body"].shape == (16,)
     assert model.codes_weights is not None and len(model.codes_weights) == 64
     assert model.codes_weights_path == str(OFFICIAL_WEIGHTS.resolve())
+
+
+def test_pose_jitter_moves_the_pose_maps_and_not_the_frames():
+    import torch
+
+    from clone.train_ref import AugmentConfig, TrainConfig
+    from clone.train_ref.data import ReferenceData
+
+    track = figure_track(6, width=64, height=64)
+    frames = np.random.default_rng(0).integers(0, 255, (6, 64, 64, 3), dtype=np.uint8)
+    data = ReferenceData(frames, track.joints, np.ones(6, bool), 64, layout="body15", faces=False)
+    assert data.height is not None and data.height > 20
+    idx = np.array([2, 3])
+    plain = data.batch(idx)
+    offsets = np.zeros((2, 15, 2))
+    offsets[1, 4] = (5.0, -3.0)  # the second sample's right wrist
+    moved = data.batch(idx, offsets)
+    assert torch.equal(plain["frame_cur"], moved["frame_cur"]) and torch.equal(plain["frame_prev"], moved["frame_prev"])
+    assert torch.equal(plain["pose_cur"][0], moved["pose_cur"][0])
+    assert not torch.equal(plain["pose_cur"][1], moved["pose_cur"][1])
+    assert not torch.equal(plain["pose_prev"][1], moved["pose_prev"][1])
+    assert TrainConfig(augment=AugmentConfig(pose_jitter=0.02)).augment.pose_jitter == 0.02
+    assert AugmentConfig().pose_jitter == 0.0
