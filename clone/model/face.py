@@ -35,6 +35,21 @@ FACE_PASS_RADII = 2.0
 BLEND_INNER_RADII, BLEND_OUTER_RADII = 1.4, 1.9
 
 
+def standing_height(joints: np.ndarray, layout: Any) -> float | None:
+    """The body's standing height in pixels from a track's body15 joints ([T, J, 2] in ``layout``), or None when
+    the track gives none."""
+    from pose_io.errors import InputError
+    from pose_io.layouts import BODY15
+    from pose_io.measures import skeleton_height
+
+    body = joints[:, : len(BODY15.joints)] if layout.name != "body15" else joints
+    try:
+        height = skeleton_height(body, "body15")
+    except InputError:
+        return None
+    return float(height) if np.isfinite(height) and height > 0 else None
+
+
 def face_radius(joints: np.ndarray, layout: Any) -> float | None:
     """Radius of the face's disc in canvas pixels (a twelfth of the body's standing height), or None when the
     layout has no face points or the track gives no height.
@@ -43,18 +58,10 @@ def face_radius(joints: np.ndarray, layout: Any) -> float | None:
         joints: [T, J, 2] canvas pixels in ``layout``.
         layout: their :class:`pose_io.layouts.JointLayout`.
     """
-    from pose_io.errors import InputError
-    from pose_io.layouts import BODY15
-    from pose_io.measures import skeleton_height
-
     if not any(layout.has(n) for n in FACE_POINTS[1:]):
         return None
-    body = joints[:, : len(BODY15.joints)] if layout.name != "body15" else joints
-    try:
-        height = skeleton_height(body, "body15")
-    except InputError:
-        return None
-    return max(3.0, height / 12.0) if np.isfinite(height) else None
+    height = standing_height(joints, layout)
+    return None if height is None else max(3.0, height / 12.0)
 
 
 def face_centres(joints: np.ndarray, layout: Any) -> np.ndarray:
@@ -237,5 +244,5 @@ class FacePass:
 __all__ = [
     "BLEND_INNER_RADII", "BLEND_OUTER_RADII", "FACE_CROP", "FACE_PASS_RADII", "FACE_POINTS", "FacePass",
     "blend_mask", "boxes_around", "build_face_pass", "face_boxes", "face_centres", "face_crops", "face_mask",
-    "face_pass_config", "face_radius", "paste", "refine_crops",
+    "face_pass_config", "face_radius", "paste", "refine_crops", "standing_height",
 ]

@@ -21,12 +21,12 @@ from torch import Tensor
 from clone.choices import Align
 from clone.model.background import PlateConfig, estimate_plate
 from clone.model.canvas import render_pose_map
-from clone.model.face import face_mask, face_radius
+from clone.model.face import face_mask, face_radius, standing_height
 from clone.model.reference import LAYOUT, file_sha256
 from clone.model.tensors import to_tensor
 from pose_io.errors import InputError
-from pose_io.layouts import BODY15, JointLayout, get_layout
-from pose_io.measures import reference_limb_lengths, skeleton_height
+from pose_io.layouts import get_layout
+from pose_io.measures import reference_limb_lengths
 from pose_io.track import PoseTrack
 from retarget.baselines.global_scale import ScaleStats, scale_stats
 
@@ -71,7 +71,7 @@ class ReferenceData:
         self.indices = np.flatnonzero(usable)
         # The face's disc only where a loss uses it (it is drawn and warped with every sample).
         self.face_radius = face_radius(joints, self.layout) if faces else None
-        self.height = _standing_height(joints, self.layout)
+        self.height = standing_height(joints, self.layout)
 
     def pose_map(self, i: int, offset: np.ndarray | None = None) -> np.ndarray:
         """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0), its joints moved by ``offset`` [J, 2]."""
@@ -108,16 +108,6 @@ class ReferenceData:
             faces = np.stack([face_mask(self.joints[i], self.layout, self.face_radius, self.size) for i in idx])
             sample["face"] = torch.from_numpy(faces[:, None].astype(np.float32))  # [B, 1, S, S]
         return sample
-
-
-def _standing_height(joints: np.ndarray, layout: JointLayout) -> float | None:
-    """The body's standing height in canvas pixels (body15 joints), or None when the track gives none."""
-    body = joints[:, : len(BODY15.joints)] if layout.name != "body15" else joints
-    try:
-        height = skeleton_height(body, "body15")
-    except InputError:
-        return None
-    return float(height) if np.isfinite(height) and height > 0 else None
 
 
 def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:
