@@ -20,6 +20,7 @@ import numpy as np
 from clone.synth.appearance import Look
 from clone.synth.background import floor_line, make_background
 from clone.synth.body import PerformerRenderer
+from clone.synth.details import detail_track
 from pose_io.atomic import atomic_dir, check_new_output
 from pose_io.layouts import BODY25
 from pose_io.track import PoseTrack
@@ -118,6 +119,7 @@ def render_performance(
     start: int = 0,
     frames: int | None = None,
     turn: Turn | None = None,
+    details: bool = False,
 ) -> tuple[Iterator[np.ndarray], PoseTrack, dict]:
     """Render ``motion`` performed by a character (``skeleton`` + ``look``) from a view.
 
@@ -141,9 +143,11 @@ def render_performance(
         frames: number of frames (default: to the end).
         turn: a whole-body turn added to the clip after step 2 (:func:`retarget.world.turns.apply_turn`); the
             view's yaw stays relative to the clip's facing before it, so the camera is where it would be.
+        details: give the body31 track with the face, hand and heel points where the renderer draws them
+            (:func:`clone.synth.details.detail_track`) instead of the BODY_25 one.
 
     Returns:
-        ``(frames, track, meta)``: an iterator of [H, W, 3] uint8 RGB frames, the BODY_25
+        ``(frames, track, meta)``: an iterator of [H, W, 3] uint8 RGB frames, the BODY_25 (or body31)
         :class:`PoseTrack` of the exact projected joints, and a JSON-ready dict describing the render.
     """
     w, h = _canvas_size(size)
@@ -159,7 +163,10 @@ def render_performance(
         positions = apply_turn(positions, turn)
     camera = frame_camera(yaw, pitch, (w, h))
     xy, depth = project(positions, camera, facing, origin=ground_origin(positions))  # [T, 18, 2], [T, 18]
-    track = body25_track(xy, WORLD_JOINTS, motion.fps, (w, h))
+    if details:
+        track = detail_track(xy, depth, camera.scale, WORLD_JOINTS, look.shape, motion.fps, (w, h))
+    else:
+        track = body25_track(xy, WORLD_JOINTS, motion.fps, (w, h))
     floor_y = floor_line(camera.ty, camera.scale, h, pitch)
     meta = _performance_meta(motion, skeleton, look, camera, facing, start, stop, (w, h), floor_y)
     return render_frames(xy, depth, camera.scale, look, (w, h), WORLD_JOINTS, floor_y), track, meta
