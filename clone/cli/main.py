@@ -18,6 +18,7 @@ from clone.cli.cartoon import cartoon_command
 from clone.cli.common import OneLineErrorGroup, setup_logging
 from clone.cli.demo import demo_command
 from clone.cli.pose import pose_app
+from clone.cli.prior import train_prior_command
 from clone.cli.report import report_command
 from clone.cli.retarget import retarget_app
 from clone.cli.search import search_app
@@ -52,6 +53,7 @@ def _root(
 # The command groups, in the order `clone --help` lists them (each module imports its heavy libraries inside its
 # commands, so registering them here keeps `clone --help` fast).
 app.command("train-ref")(cloning.train_ref)
+app.command("train-prior")(train_prior_command)
 app.command("drive")(cloning.drive)
 app.command("strip")(cloning.strip)
 app.command("report")(report_command)

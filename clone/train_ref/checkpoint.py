@@ -55,6 +55,8 @@ class ReferenceInfo:
             draw ``track``.
         face_radius: the face's radius on the canvas (:func:`clone.model.face.face_radius`), or None (no face
             points, or before the frames are read): the face pass is stored only with it.
+        prior: for a generator prior (:mod:`clone.train_ref.prior`), the synthetic performers it trains on
+            (``PriorConfig`` as a dict, kept in the training record as ``prior``), else None.
     """
 
     canvas: Canvas
@@ -67,6 +69,7 @@ class ReferenceInfo:
     plate: np.ndarray | None = None
     details: PoseTrack | None = None
     face_radius: float | None = None
+    prior: dict[str, Any] | None = None
 
 
 def checkpoint_model(
@@ -89,6 +92,8 @@ def checkpoint_model(
         "trainer": trainer.state_dict(),
         "rng": rng.get_state(),
     }
+    if reference.prior is not None:
+        training["prior"] = reference.prior
     face_pass = None
     if trainer.face_pass is not None and reference.face_radius is not None:
         face_pass = {"config": trainer.face_pass.config.to_dict(), "state_dict": trainer.face_pass.state_dict(),
@@ -183,10 +188,7 @@ def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceMo
     if not path.is_file():
         raise InputError(f"--init {path}: no such model")
     model = load_reference_model(path)
-    want, have = config.generator_config().to_dict(), model.generator_config.to_dict()
-    differ = [f"{k} {have.get(k)} (wanted {v})" for k, v in want.items() if have.get(k) != v]
-    if model.pose_layout != config.pose_layout:
-        differ.append(f"pose layout {model.pose_layout} (wanted {config.pose_layout})")
+    differ = generator_differences(model, config)
     if differ:
         raise InputError(f"--init {path}: its generator differs from this run's: {', '.join(differ)}; "
                          "train with the same --size and options, or pass --init none")
@@ -194,6 +196,15 @@ def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceMo
     if disc is not None and disc.get("config") != config.discriminator_config().to_dict():
         disc = None
     return model, disc
+
+
+def generator_differences(model: ReferenceModel, config: TrainConfig) -> list[str]:
+    """How ``model``'s generator differs from the one a run of ``config`` trains (empty: it can start from it)."""
+    want, have = config.generator_config().to_dict(), model.generator_config.to_dict()
+    differ = [f"{k} {have.get(k)} (wanted {v})" for k, v in want.items() if have.get(k) != v]
+    if model.pose_layout != config.pose_layout:
+        differ.append(f"pose layout {model.pose_layout} (wanted {config.pose_layout})")
+    return differ
 
 
 def strip_resume_state(model: ReferenceModel) -> ReferenceModel:

@@ -89,7 +89,7 @@ class ReferenceData:
             frame of frame 0 is zeros); ``has_prev``: [B] bool; with a plate, ``plate``: [B, 3, S, S] (one
             copy per sample: each is warped with its sample).
         """
-        prev = idx - 1
+        prev = self.previous(idx)
         zero = np.zeros((self.size, self.size, 3), dtype=np.uint8)
         has_prev = torch.from_numpy(prev >= 0)
         frame_prev = to_tensor(np.stack([self.frames[p] if p >= 0 else zero for p in prev]))
@@ -102,12 +102,25 @@ class ReferenceData:
             "frame_cur": to_tensor(np.stack([self.frames[i] for i in idx])),
             "has_prev": has_prev,
         }
-        if self.plate is not None:
-            sample["plate"] = to_tensor(self.plate[None]).repeat(len(idx), 1, 1, 1)  # [B, 3, S, S]
+        plates = self.plates(idx)
+        if plates is not None:
+            sample["plate"] = plates
         if self.face_radius is not None:
             faces = np.stack([face_mask(self.joints[i], self.layout, self.face_radius, self.size) for i in idx])
             sample["face"] = torch.from_numpy(faces[:, None].astype(np.float32))  # [B, 1, S, S]
         return sample
+
+
+    def previous(self, idx: np.ndarray) -> np.ndarray:
+        """[B] the frame before each of ``idx`` (-1: none)."""
+        return idx - 1
+
+    def plates(self, idx: np.ndarray) -> Tensor | None:
+        """[B, 3, S, S] the background plate of each of ``idx`` in [-1, 1] (one copy per sample: each is warped
+        with its sample), or None without a plate."""
+        if self.plate is None:
+            return None
+        return to_tensor(self.plate[None]).repeat(len(idx), 1, 1, 1)
 
 
 def reference_plate(data: ReferenceData, config: PlateConfig) -> np.ndarray:

@@ -230,6 +230,28 @@ add("train-ref frames are a text file", ["train-ref", "{t}/poses.npz", "{t}/note
     [b.poses_npz, b.text_file])
 pose_inputs("train-ref", ["train-ref"], ["{t}/ref/frames", "--out", "{t}/m.pt", "--device", "cpu"], [b.reference])
 
+# ------------------------------------------------------------------------------------------------ train-prior
+
+PRIOR = ["train-prior", "--mocap", "{t}/mocap", "--out", "{t}/new.pt", "--device", "cpu", "--threads", "1"]
+options("train-prior", PRIOR, [b.mocap_empty], {
+    "--size": ["16", "48", "2048", "nan"], "--performers": BAD_COUNTS, "--frames": ["1", "-1", "99999999999"],
+    "--seed": ["-1", "nan"], "--steps": ["0", "-1"], "--minutes": NEG_FLOATS, "--threads": ["0"],
+    "--device": ["bogus"],
+})
+paths("train-prior", PRIOR[:3], [b.mocap_empty, *EVERY_OUTPUT], "--out",
+      ["{t}/old.pt", "{t}/olddir", "{t}/blocker/m.pt", "/proc/m.pt", "{t}/old"])
+paths("train-prior --export", PRIOR, [b.mocap_empty, *EVERY_OUTPUT], "--export",
+      ["{t}/new.pt", "{t}/dir", "{t}/blocker/p.pt", "/proc/p.pt"])
+add("train-prior empty mocap", PRIOR, [b.mocap_empty])
+add("train-prior missing mocap", ["train-prior", "--mocap", "{t}/nomocap", "--out", "{t}/n.pt"])
+add("train-prior too many frames", [*PRIOR, "--performers", "4096", "--frames", "1000"], [b.mocap_empty])
+add("train-prior --resume nothing", [*PRIOR, "--resume"], [b.mocap_empty])
+add("train-prior --resume --overwrite", [*PRIOR, "--resume", "--overwrite"], [b.mocap_empty])
+for path, builder in BAD_MODELS.items():
+    if builder is not None and path.endswith(".pt"):
+        add(f"train-prior --resume {path[4:]}", [*PRIOR[:3], "--out", path, "--resume", "--device", "cpu"],
+            [b.mocap_empty, builder])
+
 # ------------------------------------------------------------------------------------------------ drive, report
 
 DRIVE = ["drive", "{t}/poses.npz", "--out", "{t}/new.mp4", "--device", "cpu"]

@@ -73,7 +73,8 @@ def test_the_corpus_is_big_enough():
     commands = {" ".join(c.argv[:2]) if c.argv[0] in ("pose", "retarget", "synth", "world", "search")
                 else c.argv[0] for c in CASES}
     assert commands >= {"pose info", "pose show", "pose convert", "pose extract", "retarget apply",
-                        "retarget train", "retarget eval", "retarget interpolate", "train-ref", "drive", "report",
+                        "retarget train", "retarget eval", "retarget interpolate", "train-ref", "train-prior", "drive",
+                        "report",
                         "demo", "synth render", "world build", "search index", "search query", "search eval",
                         "cartoon"}
 
