@@ -14,6 +14,7 @@ gradient into them (:class:`clone.train_ref.trainer.Trainer`), so the body is tr
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -97,6 +98,19 @@ def face_mask(joints: np.ndarray, layout: Any, radius: float, size: int) -> np.n
     if np.isfinite(cx) and -radius < cx < size + radius and -radius < cy < size + radius:
         cv2.circle(mask, (round(float(cx)), round(float(cy))), round(radius), 1, -1)
     return mask.astype(bool)
+
+
+@functools.lru_cache(maxsize=64)
+def drawn_radius(radius: float) -> float:
+    """The radius training sees of a face disc of ``radius``: :func:`face_boxes` takes it from the area of the disc
+    :func:`face_mask` draws in whole pixels (``sqrt(area / pi)``), which differs from ``radius`` by up to a few per
+    cent; driving crops with it, so that the face pass sees faces at the scale it was trained on."""
+    import cv2
+
+    r = round(radius)
+    mask = np.zeros((2 * r + 3, 2 * r + 3), dtype=np.uint8)
+    cv2.circle(mask, (r + 1, r + 1), r, 1, -1)
+    return math.sqrt(float(mask.sum()) / math.pi)
 
 
 def boxes_around(cx: Tensor, cy: Tensor, half: Tensor) -> Tensor:
@@ -232,7 +246,7 @@ class FacePass:
         if not bool(seen.any()):
             return frame
         at = torch.nan_to_num(centres[seen])
-        boxes = boxes_around(at[:, 0], at[:, 1], torch.full_like(at[:, 0], FACE_PASS_RADII * self.radius))
+        boxes = boxes_around(at[:, 0], at[:, 1], torch.full_like(at[:, 0], FACE_PASS_RADII * drawn_radius(self.radius)))
         mask = blend_mask(frame.device)
         frame_crop = face_crops(frame[seen], boxes)
         refined = refine_crops(self.net, face_crops(pose[seen], boxes), frame_crop, mask)
@@ -243,6 +257,6 @@ class FacePass:
 
 __all__ = [
     "BLEND_INNER_RADII", "BLEND_OUTER_RADII", "FACE_CROP", "FACE_PASS_RADII", "FACE_POINTS", "FacePass",
-    "blend_mask", "boxes_around", "build_face_pass", "face_boxes", "face_centres", "face_crops", "face_mask",
+    "blend_mask", "boxes_around", "build_face_pass", "drawn_radius", "face_boxes", "face_centres", "face_crops", "face_mask",
     "face_pass_config", "face_radius", "paste", "refine_crops", "standing_height",
 ]

@@ -35,6 +35,20 @@ def test_face_boxes_centre_on_the_disc_and_mark_samples_without_a_face():
     assert face.face_crops(torch.rand(2, 3, 64, 64), boxes).shape == (2, 3, face.FACE_CROP, face.FACE_CROP)
 
 
+@pytest.mark.parametrize("radius", [6.4, 9.5, 13.69, 21.2])
+def test_the_drive_crops_faces_at_the_scale_training_does(radius):
+    """Training boxes come from the drawn disc's area, the drive's from the stored radius: the same crop."""
+    layout = get_layout("body31")
+    joints = np.full((len(layout), 2), np.nan, dtype=np.float32)
+    joints[layout.index("nose")] = (60.0, 50.0)
+    disc = torch.from_numpy(face.face_mask(joints, layout, radius, 128)[None, None].astype(np.float32))
+    boxes, _ = face.face_boxes(disc, face.FACE_PASS_RADII)
+    trained_half = float(boxes[0, 1, 0] - boxes[0, 0, 0]) / 2
+    assert face.FACE_PASS_RADII * face.drawn_radius(radius) == pytest.approx(trained_half, rel=1e-5)
+    # the stored radius alone would have been off by more than rounding
+    assert abs(face.FACE_PASS_RADII * radius - trained_half) > 1e-3
+
+
 def test_face_centres_are_the_mean_of_the_visible_face_points():
     layout = get_layout("body31")
     joints = np.full((3, len(layout), 2), np.nan, dtype=np.float32)
