@@ -24,6 +24,9 @@ class AugmentConfig:
         pose_jitter: standard deviation of Gaussian noise added to every joint of the pose maps G and D see (not
             to the frames), as a share of the reference's standing height (0: none): the same frame under
             slightly different poses, so that poses the reference never made map to her look.
+        mirror: share of the samples flipped left-right (frames, plate and pose maps, left and right joints
+            swapped): a reference who turns one way is also seen turning the other, her left arm's poses also on
+            her right. Only for outfits and backgrounds that look alike mirrored (no writing, no one-sided cut).
     """
 
     rotation_deg: float = 3.0
@@ -32,6 +35,7 @@ class AugmentConfig:
     prev_jitter: float = 0.1
     prev_noise: float = 0.03
     pose_jitter: float = 0.0
+    mirror: float = 0.0
 
 
 @dataclass(frozen=True)

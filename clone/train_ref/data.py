@@ -73,16 +73,35 @@ class ReferenceData:
         self.face_radius = face_radius(joints, self.layout) if faces else None
         self.height = standing_height(joints, self.layout)
 
-    def pose_map(self, i: int, offset: np.ndarray | None = None) -> np.ndarray:
-        """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0), its joints moved by ``offset`` [J, 2]."""
+    def frame_joints(self, i: int, mirrored: bool = False) -> np.ndarray:
+        """[J, 2] frame ``i``'s joints on the canvas; ``mirrored``: as they are in the frame flipped left-right
+        (x mirrored, left and right joints swapped, as a pose estimator would label the flipped person)."""
+        joints = self.joints[i]
+        if not mirrored:
+            return joints
+        joints = joints[self.layout.mirror].copy()
+        joints[:, 0] = (self.size - 1) - joints[:, 0]
+        return joints
+
+    def pose_map(self, i: int, offset: np.ndarray | None = None, mirrored: bool = False) -> np.ndarray:
+        """[S, S, 3] uint8 pose map of frame ``i`` (black for i < 0), its joints moved by ``offset`` [J, 2]
+        (after mirroring, when ``mirrored``)."""
         if i < 0:
             return np.zeros((self.size, self.size, 3), dtype=np.uint8)
-        joints = self.joints[i] if offset is None else self.joints[i] + offset
+        joints = self.frame_joints(i, mirrored)
+        if offset is not None:
+            joints = joints + offset
         return render_pose_map(joints, self.size, self.layout)
 
-    def batch(self, idx: np.ndarray, offsets: np.ndarray | None = None) -> dict[str, Tensor]:
+    def frame(self, i: int, mirrored: bool = False) -> np.ndarray:
+        """[S, S, 3] uint8 frame ``i`` (flipped left-right when ``mirrored``)."""
+        return self.frames[i][:, ::-1] if mirrored else self.frames[i]
+
+    def batch(self, idx: np.ndarray, offsets: np.ndarray | None = None,
+              mirror: np.ndarray | None = None) -> dict[str, Tensor]:
         """Tensors for frames ``idx`` and their predecessors; ``offsets`` [B, J, 2] moves the joints of sample
-        b's two pose maps (not its frames or face disc) by ``offsets[b]`` canvas pixels.
+        b's two pose maps (not its frames or face disc) by ``offsets[b]`` canvas pixels; ``mirror`` [B] bool
+        flips sample b left-right (frames, plate, face disc; its pose maps drawn from :meth:`frame_joints`).
 
         Returns:
             ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
@@ -91,25 +110,30 @@ class ReferenceData:
         """
         prev = self.previous(idx)
         zero = np.zeros((self.size, self.size, 3), dtype=np.uint8)
+        flips = [False] * len(idx) if mirror is None else [bool(m) for m in mirror]
         has_prev = torch.from_numpy(prev >= 0)
-        frame_prev = to_tensor(np.stack([self.frames[p] if p >= 0 else zero for p in prev]))
+        frame_prev = to_tensor(np.stack([self.frame(p, f) if p >= 0 else zero for p, f in zip(prev, flips)]))
         frame_prev[~has_prev] = 0.0
         moved = [None] * len(idx) if offsets is None else list(offsets)
         sample = {
-            "pose_prev": to_tensor(np.stack([self.pose_map(int(p), o) for p, o in zip(prev, moved)])),
-            "pose_cur": to_tensor(np.stack([self.pose_map(int(i), o) for i, o in zip(idx, moved)])),
+            "pose_prev": to_tensor(np.stack([self.pose_map(int(p), o, f) for p, o, f in zip(prev, moved, flips)])),
+            "pose_cur": to_tensor(np.stack([self.pose_map(int(i), o, f) for i, o, f in zip(idx, moved, flips)])),
             "frame_prev": frame_prev,
-            "frame_cur": to_tensor(np.stack([self.frames[i] for i in idx])),
+            "frame_cur": to_tensor(np.stack([self.frame(i, f) for i, f in zip(idx, flips)])),
             "has_prev": has_prev,
         }
         plates = self.plates(idx)
         if plates is not None:
+            flipped = torch.tensor(flips)
+            if bool(flipped.any()):
+                plates = plates.clone()
+                plates[flipped] = plates[flipped].flip(-1)
             sample["plate"] = plates
         if self.face_radius is not None:
-            faces = np.stack([face_mask(self.joints[i], self.layout, self.face_radius, self.size) for i in idx])
+            faces = np.stack([face_mask(self.frame_joints(i, f), self.layout, self.face_radius, self.size)
+                              for i, f in zip(idx, flips)])
             sample["face"] = torch.from_numpy(faces[:, None].astype(np.float32))  # [B, 1, S, S]
         return sample
-
 
     def previous(self, idx: np.ndarray) -> np.ndarray:
         """[B] the frame before each of ``idx`` (-1: none)."""

@@ -308,7 +308,10 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     if config.augment.pose_jitter and data.height:  # drawn only when asked, so runs without it draw as before
         noise = torch.randn(total, data.joints.shape[1], 2, generator=rng).numpy()  # [total, J, 2]
         offsets = (noise * config.augment.pose_jitter * data.height)[part]
-    sample = warp_batch(data.batch(data.indices[pick[part]], offsets), matrices[part])
+    mirror = None
+    if config.augment.mirror:  # drawn only when asked, so runs without it draw as before
+        mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()[part]
+    sample = warp_batch(data.batch(data.indices[pick[part]], offsets, mirror), matrices[part])
     pin = trainer.device.type == "cuda"
     sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
     prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)

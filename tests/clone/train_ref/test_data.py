@@ -106,3 +106,45 @@ def test_pose_jitter_moves_the_pose_maps_and_not_the_frames():
     assert not torch.equal(plain["pose_prev"][1], moved["pose_prev"][1])
     assert TrainConfig(augment=AugmentConfig(pose_jitter=0.02)).augment.pose_jitter == 0.02
     assert AugmentConfig().pose_jitter == 0.0
+
+
+def test_mirror_flips_frames_plate_and_face_and_swaps_the_pose_maps_sides():
+    import torch
+
+    from clone.model.canvas import render_pose_map
+    from clone.train_ref.data import ReferenceData
+    from pose_io.layouts import get_layout
+
+    layout = get_layout("body31")
+    track = figure_track(6, width=64, height=64).to_layout("body31")
+    joints = track.joints.copy()
+    joints[:, layout.index("nose")] += (6.0, 0.0)  # a face off the body's axis, so that mirroring moves it
+    frames = np.random.default_rng(0).integers(0, 255, (6, 64, 64, 3), dtype=np.uint8)
+    plate = np.random.default_rng(1).integers(0, 255, (64, 64, 3), dtype=np.uint8)
+    data = ReferenceData(frames, joints, np.ones(6, bool), 64, plate=plate, layout="body31")
+    idx = np.array([2, 3])
+    plain, flipped = data.batch(idx), data.batch(idx, mirror=np.array([False, True]))
+    for key in ("pose_cur", "pose_prev", "frame_cur", "frame_prev", "plate", "face"):
+        assert torch.equal(plain[key][0], flipped[key][0]), key
+    for key in ("frame_cur", "frame_prev", "plate", "face"):
+        assert torch.equal(flipped[key][1], plain[key][1].flip(-1)), key
+    assert not torch.equal(flipped["face"][1], plain["face"][1])
+    # the flipped person's right wrist is where her left one was, mirrored
+    mirrored = data.frame_joints(3, mirrored=True)
+    left, right = layout.index("l_wrist"), layout.index("r_wrist")
+    np.testing.assert_allclose(mirrored[right], (63.0 - joints[3, left, 0], joints[3, left, 1]))
+    np.testing.assert_allclose(data.frame_joints(3, True)[layout.mirror] * (-1, 1) + (63.0, 0), joints[3])
+    expected = torch.from_numpy(render_pose_map(mirrored, 64, layout)).permute(2, 0, 1).float() / 127.5 - 1.0
+    torch.testing.assert_close(flipped["pose_cur"][1], expected)
+    # a pose map is not the flipped image of the other: the sides' colours are swapped
+    assert not torch.equal(flipped["pose_cur"][1], plain["pose_cur"][1].flip(-1))
+
+
+def test_a_run_with_mirror_trains(reference, tmp_path):
+    from clone.train_ref import AugmentConfig, TrainConfig, train_reference
+
+    poses, frames = reference
+    config = TrainConfig(size=32, augment=AugmentConfig(mirror=1.0))
+    result = train_reference(poses, frames, tmp_path / "m.pt", config=config, steps=2, device="cpu")
+    assert result.steps == 2
+    assert load_reference_model(tmp_path / "m.pt").training["config"]["augment"]["mirror"] == 1.0
