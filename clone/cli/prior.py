@@ -2,6 +2,7 @@
 
     clone train-prior --mocap ../shared/mocap --steps 10000 --out runs/prior.pt --export prior_256.pt
     clone train-prior --mocap ../shared/mocap --steps 20000 --out runs/prior.pt --resume --export prior_256.pt
+    clone train-prior --mocap ../shared/mocap --steps 10000 --out runs/more.pt --init prior_256.pt --export more_256.pt
     clone train-ref REF.mp4 --size 256 --init prior_256.pt
 """
 
@@ -30,7 +31,7 @@ def train_prior_command(
         "--out", "-o", help="The prior run's model file, with its training state (resume it with --resume).")],
     export: Annotated[Path | None, typer.Option(
         "--export", help="Also write the compact prior here (float16, no optimiser state): what "
-        "`clone train-ref --init` reads and the package ships.")] = None,
+        "`clone train-ref --init` reads.")] = None,
     size: Annotated[int, typer.Option("--size", help="Canvas size (a power of two).")] = 256,
     performers: Annotated[int, typer.Option("--performers", help="How many synthetic performers.")] = 128,
     frames: Annotated[int, typer.Option("--frames", help="Consecutive frames of each.")] = 40,
@@ -39,6 +40,9 @@ def train_prior_command(
         "--steps", help="Stop when the prior has this many steps in all (default 2000 without --minutes).")] = None,
     minutes: Annotated[float | None, typer.Option("--minutes", help="Stop after this many minutes.")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run at --out (the same performers).")] = False,
+    init: Annotated[Path | None, typer.Option(
+        "--init", help="Start a new run from this prior's (or model's) networks, e.g. an --export of an "
+        "earlier run, to train it further without its optimiser state.")] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing run at --out.")] = False,
     device: Annotated[str, typer.Option("--device", help=DEVICE_HELP)] = "auto",
     threads: Annotated[int | None, typer.Option("--threads", min=1, help="CPU threads (default: free cores).")] = None,
@@ -68,6 +72,10 @@ def train_prior_command(
     if need > MAX_PRIOR_BYTES:
         raise InputError(f"--performers {performers} x --frames {frames} at {size}² would hold "
                          f"{need / 2**30:.1f} GiB of frames in memory (at most {MAX_PRIOR_BYTES / 2**30:.0f})")
+    if init is not None and resume:
+        raise InputError("--init starts a new prior run; --resume continues one: pass only one of them")
+    if init is not None and not init.is_file():
+        raise InputError(f"--init {init}: no such file")
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     check_output(out, "--out", overwrite=overwrite, replaceable=resume)
@@ -93,7 +101,8 @@ def train_prior_command(
                 bar(p.elapsed, p.limit_s, text=text)
 
         path, done = train_prior(mocap, out, config=config, prior=prior, steps=steps, minutes=minutes, device=dev,
-                                 resume=resume, overwrite=overwrite, progress=update, grow_threads=threads is None)
+                                 resume=resume, overwrite=overwrite, progress=update, grow_threads=threads is None,
+                                 init=init)
     console.print(f"wrote {path} ({done} steps in all; --resume continues it)")
     if export is not None:
         export_prior(path, export, overwrite=True)

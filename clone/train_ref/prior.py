@@ -1,6 +1,6 @@
 """A generator prior: the pose-to-frame generator (with its discriminator and face pass) trained on many synthetic
-performers, so that a reference model starts from a network that has already seen many bodies, outfits, views
-and poses (``clone train-ref --init``, by default the shipped prior where it fits).
+performers, so that a reference model can start from a network that has already seen many bodies, outfits, views
+and poses (``clone train-ref --init PRIOR``).
 
 The performers are the project's own (:mod:`clone.synth`: licence-clean): each is a random character (bones,
 body shape, skin, hair, clothes), a random clip of the motion capture under ``--mocap``, a random view (front,
@@ -12,7 +12,8 @@ dataset (:class:`PerformerData`); a step samples across them.
 
 The run is a `clone train-ref` run in every other way (same trainer, losses, schedule, checkpoint: ``--resume``
 continues it from the same performers, which are drawn from the seed). :func:`export_prior` writes the compact
-file that is shipped: no optimiser state, float16 weights.
+file: no optimiser state, float16 weights. None is shipped: the one measured (docs/cloning.md) cost held-out quality
+on real references.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from clone.model.reference import (
 from clone.model.tensors import to_tensor
 from clone.synth.appearance import Backdrop, get_character
 from clone.synth.performance import performance_background, render_performance
-from clone.train_ref.checkpoint import ReferenceInfo
+from clone.train_ref.checkpoint import ReferenceInfo, load_init
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import ReferenceData, track_summary
 from clone.train_ref.state import ProgressFn, StepProgress, check_options, previous_and_config, start_run
@@ -52,9 +53,6 @@ from retarget.world.rigs import load_motion
 from retarget.world.turns import draw_turn
 
 log = logging.getLogger(__name__)
-
-# The shipped prior (``export_prior`` of a run on the project's synthetic performers; its card beside it).
-PACKAGED_PRIOR = Path(__file__).resolve().parent.parent / "data" / "generator_prior_256.pt"
 
 
 @dataclass(frozen=True)
@@ -195,6 +193,7 @@ def train_prior(
     overwrite: bool = False,
     progress: ProgressFn | None = None,
     grow_threads: bool = False,
+    init: str | os.PathLike | None = None,
 ) -> tuple[Path, int]:
     """Train (or continue) a generator prior on synthetic performers; the model file at ``out`` keeps the full
     training state (``resume`` continues it); :func:`export_prior` makes the compact file.
@@ -209,6 +208,8 @@ def train_prior(
         resume, overwrite: continue the model at ``out``, or replace it.
         progress: called after every performer rendered and every step.
         grow_threads: raise torch's threads whenever more cores come free (CPU).
+        init: a new run starts from the networks of this model or compact prior (whose optimiser state is not
+            kept: an exported prior is continued this way); see :func:`clone.train_ref.checkpoint.load_init`.
 
     Returns:
         ``(out, steps in all)``.
@@ -224,6 +225,9 @@ def train_prior(
         stored = ((previous.training or {}).get("prior") or {})
         prior = PriorConfig(**stored) if stored else (prior or PriorConfig())
     prior = prior or PriorConfig()
+    if init is not None and resume:
+        raise InputError("--init starts a new prior run; --resume continues one: pass only one of them")
+    start = load_init(init, config) if init is not None else None
     if steps is None and minutes is None:
         steps = config.steps
     device = torch.device(device)
@@ -237,7 +241,7 @@ def train_prior(
                               None, None, plate=data.plate, details=details,
                               face_radius=data.face_radius if config.face_pass else None, prior=prior.to_dict())
     run = start_run(out, reference, config, device=device, previous=previous, progress=progress,
-                    world=distributed.World(), part=None)
+                    world=distributed.World(), part=None, init=start)
     with torch.enable_grad():
         run.started = time.perf_counter()
         grow = ThreadGrowth() if grow_threads and device.type == "cpu" else None
@@ -268,21 +272,6 @@ def export_prior(path: str | os.PathLike, out: str | os.PathLike, overwrite: boo
     compact = replace(model, generator_state=_half(model.generator_state), face_pass=face_pass, training=kept)
     save_reference_model(compact, out, overwrite=overwrite)
     return Path(out)
-
-
-def matching_prior(config: TrainConfig, path: str | os.PathLike | None = None) -> Path | None:
-    """The generator prior at ``path`` (default: the shipped one) when a run of ``config`` can start from it
-    (the same generator and pose layout, see :func:`clone.train_ref.checkpoint.load_init`), else None."""
-    from clone.train_ref.checkpoint import generator_differences
-
-    path = Path(path) if path is not None else PACKAGED_PRIOR
-    if not path.is_file():
-        return None
-    try:
-        model = load_reference_model(path)
-    except InputError:
-        return None
-    return None if generator_differences(model, config) else path
 
 
 def _half(state: dict[str, Tensor]) -> dict[str, Tensor]:

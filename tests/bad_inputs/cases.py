@@ -246,6 +246,8 @@ add("train-prior empty mocap", PRIOR, [b.mocap_empty])
 add("train-prior missing mocap", ["train-prior", "--mocap", "{t}/nomocap", "--out", "{t}/n.pt"])
 add("train-prior too many frames", [*PRIOR, "--performers", "4096", "--frames", "1000"], [b.mocap_empty])
 add("train-prior --resume nothing", [*PRIOR, "--resume"], [b.mocap_empty])
+add("train-prior --init missing", [*PRIOR, "--init", "{t}/none.pt"], [b.mocap_empty])
+add("train-prior --init --resume", [*PRIOR, "--init", "{t}/old.pt", "--resume"], [b.mocap_empty, b.old_outputs])
 add("train-prior --resume --overwrite", [*PRIOR, "--resume", "--overwrite"], [b.mocap_empty])
 for path, builder in BAD_MODELS.items():
     if builder is not None and path.endswith(".pt"):
