@@ -97,7 +97,7 @@ class TrainConfig:
         plate: how the plate is estimated.
         face_pass: train a face pass beside the generator (:mod:`clone.model.face`: a small U-Net on the face's
             crop adding a residual, as Everybody Dance Now's face GAN, with its own discriminator), stored in the
-            model and run by `clone drive`. None: on from 256² canvases up. Body31 pose maps only (off with
+            model and run by `clone drive`. None: on from 128² canvases up. Body31 pose maps only (off with
             body15); a reference whose poses have no face points trains none.
         pose_layout: what the pose maps show: ``body31`` (body15 with the face, hands and feet, front and back
             told apart, :mod:`clone.model.detail_map`) or ``body15`` (the skeleton alone, as models before it).
@@ -160,7 +160,7 @@ class TrainConfig:
         if self.pose_layout not in POSE_LAYOUTS:
             raise ValueError(f"unknown pose_layout {self.pose_layout!r}; valid: {', '.join(POSE_LAYOUTS)}")
         if self.face_pass is None:
-            object.__setattr__(self, "face_pass", self.size >= 256)
+            object.__setattr__(self, "face_pass", self.size >= 128)
         if self.pose_layout == "body15":  # no face points to find the face by
             object.__setattr__(self, "face_pass", False)
         if self.base_channels is None:

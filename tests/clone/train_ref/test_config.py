@@ -53,8 +53,8 @@ def test_the_learning_rate_falls_linearly_over_the_runs_last_part():
     assert TrainConfig.from_dict(stored).lr_decay_from == 1.0
 
 
-def test_the_face_pass_is_on_from_256_up_with_detailed_maps_and_older_runs_had_none():
-    assert TrainConfig(size=256).face_pass and not TrainConfig(size=128).face_pass
+def test_the_face_pass_is_on_from_128_up_with_detailed_maps_and_older_runs_had_none():
+    assert TrainConfig(size=256).face_pass and TrainConfig(size=128).face_pass and not TrainConfig(size=64).face_pass
     assert TrainConfig(size=64, face_pass=True).face_pass
     assert not TrainConfig(size=256, pose_layout="body15").face_pass
     assert not TrainConfig(size=256, face_pass=False).face_pass
