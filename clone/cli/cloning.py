@@ -26,7 +26,7 @@ from clone.cli.common import (
     training_device,
     user_errors,
 )
-from clone.cli.progress import extract_if_video, progress_bar
+from clone.cli.progress import extract_if_video, progress_bar, training_progress
 from pose_io.errors import InputError
 
 DEFAULT_MODEL = Path("ref_model.pt")
@@ -113,7 +113,7 @@ def train_ref(
     """
 
     from clone.model.reference import preview_path
-    from clone.train_ref import LossConfig, StepProgress, TrainConfig, train_reference
+    from clone.train_ref import LossConfig, TrainConfig, train_reference
     from pose_io.outputs import check_number, check_output
     from retarget.training import distributed
 
@@ -180,16 +180,7 @@ def train_ref(
     with distributed.launched(dev) as dev, \
             progress_bar("train-ref", count=False, elapsed=True, enabled=distributed.current().is_main) as bar:
 
-        def update(p: StepProgress) -> None:
-            if p.phase == "reading":
-                bar(p.step, p.total, text=f"reading frames {p.step}/{p.total}")
-                return
-            losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
-            text = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
-            if p.total is not None:
-                bar(p.step, p.total, text=text)
-            else:
-                bar(p.elapsed, p.limit_s, text=text)
+        update = training_progress(bar, {"reading": "reading frames"})
 
         result = train_reference(
             ref_poses, frames, out, config=config, steps=steps, minutes=minutes, device=dev, resume=resume,

@@ -15,7 +15,7 @@ import typer
 
 from clone.cli.cloning import MAX_MINUTES, MAX_SIZE, MAX_STEPS, MIN_SIZE
 from clone.cli.common import DEVICE_HELP, MAX_THREADS, console, training_device, user_errors
-from clone.cli.progress import progress_bar
+from clone.cli.progress import progress_bar, training_progress
 from pose_io.errors import InputError
 
 MAX_PERFORMERS = 4096
@@ -56,7 +56,7 @@ def train_prior_command(
     The run is a `clone train-ref` run over all of them (generator, discriminator, face pass); --resume continues
     it with the performers it was started with (--performers, --frames and --seed are then the stored ones).
     """
-    from clone.train_ref import StepProgress, TrainConfig
+    from clone.train_ref import TrainConfig
     from clone.train_ref.prior import PriorConfig, export_prior, train_prior
     from pose_io.outputs import check_number, check_output
 
@@ -89,16 +89,7 @@ def train_prior_command(
 
     with progress_bar("train-prior", count=False, elapsed=True) as bar:
 
-        def update(p: StepProgress) -> None:
-            if p.phase == "rendering":
-                bar(p.step, p.total, text=f"rendering performers {p.step}/{p.total}")
-                return
-            losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
-            text = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
-            if p.total is not None:
-                bar(p.step, p.total, text=text)
-            else:
-                bar(p.elapsed, p.limit_s, text=text)
+        update = training_progress(bar, {"rendering": "rendering performers"})
 
         path, done = train_prior(mocap, out, config=config, prior=prior, steps=steps, minutes=minutes, device=dev,
                                  resume=resume, overwrite=overwrite, progress=update, grow_threads=threads is None,

@@ -11,7 +11,7 @@ from rich is imported before a command runs (``clone --help`` stays light).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -80,3 +80,22 @@ def extract_if_video(path: Path | None) -> None:
 
         with extraction_progress(update):
             video_track_path(path)
+
+
+def training_progress(bar: Callable[..., None], before: dict[str, str]):
+    """A ``StepProgress`` callback (:mod:`clone.train_ref.state`) drawing on ``bar``: steps with their losses,
+    against the steps or the time budget; a phase named in ``before`` (e.g. ``{"reading": "reading frames"}``)
+    as that text with its count."""
+
+    def update(p) -> None:
+        if p.phase in before:
+            bar(p.step, p.total, text=f"{before[p.phase]} {p.step}/{p.total}")
+            return
+        losses = " ".join(f"{k} {v:.3f}" for k, v in p.losses.items())
+        text = f"step {p.step}{'/' + str(p.total) if p.total else ''}  {losses}"
+        if p.total is not None:
+            bar(p.step, p.total, text=text)
+        else:
+            bar(p.elapsed, p.limit_s, text=text)
+
+    return update
