@@ -82,7 +82,8 @@ def train_prior_command(
     if export is not None:
         if export.resolve() == out.resolve():
             raise InputError("--export: give another file than --out (the run keeps its training state)")
-        check_output(export, "--export", overwrite=True)
+        # an earlier export of the run being resumed is what --resume refreshes
+        check_output(export, "--export", overwrite=overwrite or resume)
     dev = training_device(device, threads)
     config = None if resume else TrainConfig(size=size)
     prior = PriorConfig(performers=performers, frames=frames, seed=seed)

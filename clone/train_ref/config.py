@@ -175,6 +175,11 @@ class TrainConfig:
             return 1.0
         return max(0.0, (1.0 - progress) / (1.0 - self.lr_decay_from))
 
+    @property
+    def uses_faces(self) -> bool:
+        """Whether a loss or the face pass needs each sample's face disc."""
+        return bool(self.loss.face or self.loss.face_gan or self.face_pass)
+
     def generator_config(self) -> GeneratorConfig:
         """The generator this run trains."""
         depth = self.depth if self.depth is not None else default_depth(self.size)

@@ -220,9 +220,8 @@ def _read_frames(run: TrainingRun, frames: Frames, count: int, usable: np.ndarra
         run.report(StepProgress("reading", i + 1, count, run.elapsed(), None, {}))
     log.info("read %d frames in %.1f s", count, run.elapsed())
     drawn = run.reference.details if run.reference.details is not None else run.reference.track
-    loss = run.config.loss
     data = ReferenceData(store, image_to_canvas(drawn.joints, canvas), usable, canvas.size, layout=drawn.layout,
-                         faces=bool(loss.face or loss.face_gan or run.config.face_pass))
+                         faces=run.config.uses_faces)
     if run.config.face_pass:
         if data.face_radius is None:
             log.info("the reference's poses have no face points: no face pass is trained")

@@ -69,8 +69,8 @@ class PriorConfig:
         seed: draws the performers.
     """
 
-    performers: int = 48
-    frames: int = 100
+    performers: int = 128
+    frames: int = 40
     render_scale: int = 2
     studio_share: float = 0.4
     turn_share: float = 0.3
@@ -131,7 +131,7 @@ def render_performers(mocap: str | os.PathLike, config: PriorConfig, size: int, 
         record of what it trained on).
 
     Raises:
-        InputError: no motion capture under ``mocap``.
+        InputError: no motion capture under ``mocap``, or no clip there readable and ``frames`` long.
     """
     files = find_mocap_files(Path(mocap))
     if not files:
@@ -144,15 +144,21 @@ def render_performers(mocap: str | os.PathLike, config: PriorConfig, size: int, 
     body: list[np.ndarray] = []
     plates = np.zeros((n, size, size, 3), dtype=np.uint8)
     started = time.perf_counter()
+    motions: dict[Path, Any] = {}  # each clip read once; None: unreadable or shorter than ``frames``
     i = 0
     while i < n:
         path = files[int(rng.integers(len(files)))]
-        try:
-            motion = load_motion(path)
-        except InputError as exc:  # a rig the world cannot map
-            log.info("skipping %s: %s", path, exc)
-            continue
-        if motion.num_frames < f:
+        if path not in motions:
+            try:
+                motion = load_motion(path)
+            except InputError as exc:  # a rig the world cannot map
+                log.info("skipping %s: %s", path, exc)
+                motion = None
+            motions[path] = motion if motion is not None and motion.num_frames >= f else None
+            if len(motions) == len(files) and not any(m is not None for m in motions.values()):
+                raise InputError(f"--mocap {mocap}: no clip there is readable and {f} frames long")
+        motion = motions[path]
+        if motion is None:
             continue
         skeleton, look, _ = get_character(str(int(rng.integers(1 << 20))))
         if rng.random() < config.studio_share:
@@ -162,21 +168,21 @@ def render_performers(mocap: str | os.PathLike, config: PriorConfig, size: int, 
         turn = draw_turn(rng, f) if rng.random() < config.turn_share else None
         stream, track, _ = render_performance(motion, skeleton, look, yaw, pitch, render, start, f, turn=turn,
                                               details=train.pose_layout == DETAIL_LAYOUT)
-        canvas = choose_canvas(track.to_layout(LAYOUT).joints, track.image_size, size, train.canvas_mode,
-                               train.canvas_margin)
+        body15 = track.to_layout(LAYOUT).joints
+        canvas = choose_canvas(body15, track.image_size, size, train.canvas_mode, train.canvas_margin)
         for t, frame in enumerate(stream):
             frames[i * f + t] = cut_frame(frame, canvas)
         plates[i] = cut_frame(performance_background(look, yaw, pitch, render), canvas)
         joints.append(image_to_canvas(track.joints, canvas))
-        body.append(image_to_canvas(track.to_layout(LAYOUT).joints, canvas))
+        body.append(image_to_canvas(body15, canvas))
         i += 1
         if progress is not None:
             progress(StepProgress("rendering", i, n, time.perf_counter() - started, None, {}))
     owner = np.repeat(np.arange(n), f)
     data = PerformerData(frames, np.concatenate(joints), owner, plates, size, layout=train.pose_layout,
-                         faces=bool(train.loss.face or train.loss.face_gan or train.face_pass))
-    record = PoseTrack(np.concatenate(body).astype(np.float32),
-                       np.isfinite(np.concatenate(body)[..., 0]).astype(np.float32), 30.0, (size, size), LAYOUT)
+                         faces=train.uses_faces)
+    body_joints = np.concatenate(body).astype(np.float32)
+    record = PoseTrack(body_joints, np.isfinite(body_joints[..., 0]).astype(np.float32), 30.0, (size, size), LAYOUT)
     return data, record
 
 

@@ -241,7 +241,7 @@ options("train-prior", PRIOR, [b.mocap_empty], {
 paths("train-prior", PRIOR[:3], [b.mocap_empty, *EVERY_OUTPUT], "--out",
       ["{t}/old.pt", "{t}/olddir", "{t}/blocker/m.pt", "/proc/m.pt", "{t}/old"])
 paths("train-prior --export", PRIOR, [b.mocap_empty, *EVERY_OUTPUT], "--export",
-      ["{t}/new.pt", "{t}/dir", "{t}/blocker/p.pt", "/proc/p.pt"])
+      ["{t}/new.pt", "{t}/old.pt", "{t}/dir", "{t}/blocker/p.pt", "/proc/p.pt"])
 add("train-prior empty mocap", PRIOR, [b.mocap_empty])
 add("train-prior missing mocap", ["train-prior", "--mocap", "{t}/nomocap", "--out", "{t}/n.pt"])
 add("train-prior too many frames", [*PRIOR, "--performers", "4096", "--frames", "1000"], [b.mocap_empty])

@@ -16,6 +16,7 @@ from clone.model.tensors import to_tensor
 from clone.train_ref import TrainConfig, train_reference
 from clone.train_ref.checkpoint import load_init
 from clone.train_ref.prior import PriorConfig, export_prior, render_performers, train_prior
+from pose_io.errors import InputError
 from tests.clone.test_cli_synth import write_walk_bvh
 from tests.clone.train_ref.helpers import one_line_error, train_args
 
@@ -50,6 +51,14 @@ def test_performers_form_one_training_set_with_their_own_plates(mocap: Path) -> 
     # the same seed draws the same performers
     again, _ = render_performers(mocap, SMALL, 64, TrainConfig(size=64))
     assert np.array_equal(again.frames, data.frames)
+
+
+def test_clips_too_short_for_the_performers_are_an_error_not_a_hang(tmp_path: Path) -> None:
+    folder = tmp_path / "short"
+    folder.mkdir()
+    write_walk_bvh(folder / "walk.bvh", frames=3)
+    with pytest.raises(InputError, match="4 frames long"):
+        render_performers(folder, SMALL, 64, TrainConfig(size=64))
 
 
 def test_prior_run_resumes_on_its_performers_and_exports_a_compact_prior(mocap: Path, tmp_path: Path) -> None:
