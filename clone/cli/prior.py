@@ -35,6 +35,8 @@ def train_prior_command(
     size: Annotated[int, typer.Option("--size", help="Canvas size (a power of two).")] = 256,
     performers: Annotated[int, typer.Option("--performers", help="How many synthetic performers.")] = 128,
     frames: Annotated[int, typer.Option("--frames", help="Consecutive frames of each.")] = 40,
+    plain_share: Annotated[float, typer.Option(
+        "--plain-share", help="Share of performers in one-colour shirts (the rest striped or checked).")] = 1.0,
     seed: Annotated[int, typer.Option("--seed", help="Draws the performers.")] = 0,
     steps: Annotated[int | None, typer.Option(
         "--steps", help="Stop when the prior has this many steps in all (default 2000 without --minutes).")] = None,
@@ -64,6 +66,7 @@ def train_prior_command(
         raise InputError(f"--size: must be a power of two from {MIN_SIZE} to {MAX_SIZE}, got {size}")
     check_number("--performers", performers, 1, MAX_PERFORMERS)
     check_number("--frames", frames, 2, MAX_FRAMES)
+    check_number("--plain-share", plain_share, 0, 1)
     check_number("--seed", seed, 0, 2**31 - 1)
     check_number("--steps", steps, 1, MAX_STEPS)
     check_number("--minutes", minutes, 0, MAX_MINUTES, low_open=True)
@@ -86,7 +89,7 @@ def train_prior_command(
         check_output(export, "--export", overwrite=overwrite or resume)
     dev = training_device(device, threads)
     config = None if resume else TrainConfig(size=size)
-    prior = PriorConfig(performers=performers, frames=frames, seed=seed)
+    prior = PriorConfig(performers=performers, frames=frames, plain_share=plain_share, seed=seed)
 
     with progress_bar("train-prior", count=False, elapsed=True) as bar:
 

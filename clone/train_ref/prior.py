@@ -66,6 +66,9 @@ class PriorConfig:
             person is cut out of a larger frame too).
         studio_share: share of the performers in front of a plain light wall instead of the synthetic room.
         turn_share: share of the performers who turn about (90-360 degrees) during their clip.
+        plain_share: share of the performers whose shirt is one plain colour (the others keep their character's
+            stripes or checks, which a prior learnt on them paints over a real reference as bands; measured in
+            docs/cloning.md). A run stored before this field read as 0: its performers are the same again.
         seed: draws the performers.
     """
 
@@ -74,7 +77,13 @@ class PriorConfig:
     render_scale: int = 2
     studio_share: float = 0.4
     turn_share: float = 0.3
+    plain_share: float = 1.0
     seed: int = 0
+
+    @classmethod
+    def stored(cls, values: dict[str, Any]) -> PriorConfig:
+        """The config a run stored (one from before ``plain_share`` drew every shirt as its character's)."""
+        return cls(**{"plain_share": 0.0, **values})
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -137,6 +146,7 @@ def render_performers(mocap: str | os.PathLike, config: PriorConfig, size: int, 
     if not files:
         raise InputError(f"--mocap {mocap}: no .bvh, .bvh.gz or .amc files under it")
     rng = np.random.default_rng([config.seed, 0x9121])
+    shirts = np.random.default_rng([config.seed, 0x9122])  # its own stream: the share changes shirts, nothing else
     render = size * config.render_scale
     n, f = config.performers, config.frames
     frames = np.zeros((n * f, size, size, 3), dtype=np.uint8)
@@ -163,6 +173,8 @@ def render_performers(mocap: str | os.PathLike, config: PriorConfig, size: int, 
         skeleton, look, _ = get_character(str(int(rng.integers(1 << 20))))
         if rng.random() < config.studio_share:
             look = replace(look, backdrop=_studio(rng))
+        if shirts.random() < config.plain_share:
+            look = replace(look, pattern="plain")
         yaw, pitch = float(rng.uniform(-180, 180)), float(rng.uniform(-8, 15))
         start = int(rng.integers(motion.num_frames - f + 1))
         turn = draw_turn(rng, f) if rng.random() < config.turn_share else None
@@ -229,7 +241,7 @@ def train_prior(
                                            overwrite)
     if previous is not None:
         stored = ((previous.training or {}).get("prior") or {})
-        prior = PriorConfig(**stored) if stored else (prior or PriorConfig())
+        prior = PriorConfig.stored(stored) if stored else (prior or PriorConfig())
     prior = prior or PriorConfig()
     if init is not None and resume:
         raise InputError("--init starts a new prior run; --resume continues one: pass only one of them")

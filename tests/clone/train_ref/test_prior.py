@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -144,3 +145,14 @@ def test_train_prior_command(mocap: Path, tmp_path: Path) -> None:
     assert "GiB" in line
     assert "--mocap" in one_line_error(CliRunner().invoke(app, [*args[:1], "--mocap", str(tmp_path / "none"),
                                                                 "--out", str(tmp_path / "x.pt")]))
+
+
+def test_plain_shirts_are_drawn_and_older_runs_keep_their_patterned_performers(mocap: Path) -> None:
+    patterned = replace(SMALL, plain_share=0.0)
+    plain, _ = render_performers(mocap, SMALL, 64, TrainConfig(size=64))
+    striped, _ = render_performers(mocap, patterned, 64, TrainConfig(size=64))
+    # the same bodies, poses and rooms (no extra draw at share 0); only shirts change
+    assert np.array_equal(plain.joints, striped.joints, equal_nan=True)
+    assert not np.array_equal(plain.frames, striped.frames)
+    stored = {k: v for k, v in patterned.to_dict().items() if k != "plain_share"}
+    assert PriorConfig.stored(stored) == patterned and PriorConfig.stored(SMALL.to_dict()) == SMALL
