@@ -14,9 +14,11 @@ class Method(str, Enum):
 
 
 class StageMode(str, Enum):
-    """Where a driven track may go (``clone drive --stage``): kept on the floor the ``reference`` stood on in its
-    video (:mod:`clone.drive.stage`), or its ``raw`` trajectory as the method gave it."""
+    """Where a driven track may go (``clone drive --stage``): anywhere in the ``frame`` with its travel kept, on
+    the floor the ``reference`` stood on in its video (:mod:`clone.drive.stage`), or its ``raw`` trajectory as the
+    method gave it."""
 
+    FRAME = "frame"
     REFERENCE = "reference"
     RAW = "raw"
 

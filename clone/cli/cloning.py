@@ -229,9 +229,9 @@ def drive(
     ] = Method.RETARGET,
     stage: Annotated[StageMode, typer.Option(
         "--stage", parser=StageMode,
-        help="reference: keep the driven poses on the part of the frame the reference stood on; raw: as the "
-        "method left them.")
-    ] = StageMode.REFERENCE,
+        help="frame: anywhere in the picture, the driver's travel kept; reference: on the part of the "
+        "frame the reference stood on; raw: as the method left them.")
+    ] = StageMode.FRAME,
     poses_out: Annotated[Path | None, typer.Option(
         "--poses-out", help="Also write the driven poses: a folder (OpenPose JSON), .npz or .csv.")] = None,
     side_by_side: Annotated[bool, typer.Option(
@@ -281,7 +281,8 @@ def drive(
                   f"{result.fps:g} fps ({result.method}, {result.seconds:.1f} s)"
                   + (f", with the sound of {result.audio}" if result.audio is not None else ""))
     if result.stage_share > 0:
-        console.print(f"kept on the reference's stage: {100 * result.stage_share:.1f}% of frames were off it "
+        where = "in the picture" if stage is StageMode.FRAME else "on the reference's stage"
+        console.print(f"kept {where}: {100 * result.stage_share:.1f}% of frames were outside it "
                       "(--stage raw keeps them there)")
     if result.poses_out is not None:
         console.print(f"wrote {result.poses_out}")

@@ -56,10 +56,10 @@ def report_command(
         StageMode,
         typer.Option(
             "--stage", parser=StageMode,
-            help="reference: keep the driven poses on the part of the frame the reference stood on; raw: as "
-            "each method left them.",
+            help="frame: anywhere in the picture, the driver's travel kept; reference: on the part of the "
+            "frame the reference stood on; raw: as each method left them.",
         ),
-    ] = StageMode.REFERENCE,
+    ] = StageMode.FRAME,
     refine_steps: RefineStepsOption = None,
     audio: AudioOption = "auto",
     consistency: Annotated[bool | None, typer.Option(

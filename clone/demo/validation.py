@@ -8,12 +8,12 @@ driver of kind ``turn``: the child at -30° turning its whole body by 90-360° e
 drawn per clip, :func:`retarget.world.turns.draw_turn`), its truth turning alike: real dancers and fashion models
 turn, the world's clips rarely do. Every driver is moved
 onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
-with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track kept
-on the reference's stage (:func:`clone.drive.poses.finish_driven`). The scores are the demo's primary measure, the RMSE of
+with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track
+started where the reference stands and kept inside the picture (:func:`clone.drive.poses.finish_driven`). The scores are the demo's primary measure, the RMSE of
 the MidHip-aligned joints in % of the ground truth's height, and its placement, the MidHip's RMS distance from the
 truth's (:func:`clone.metrics.track_gt_scores`). Everybody
-Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.poses.global_scale_to`, then the
-stage).
+Dance Now's global scaling is scored on the same pairs, its own way (:func:`clone.drive.poses.global_scale_to`, then
+kept inside the picture).
 
 Why it exists: the world's eval cases (`clone retarget eval`: 64-frame windows, any view and pitch, a 64-frame
 reference) rank checkpoints in an order cloning does not follow; this measure follows the demo.
@@ -218,7 +218,7 @@ def markdown(doc: Mapping) -> str:
     lines += ["", "## Notes", "",
               f"- Drivers: {doc['pairs']}. Reference: {doc['reference']}.",
               ("- Every method runs as `clone drive` runs it (networks: motion codes refined, foot skating cleaned "
-               "with the driver's contacts; then the stage fit onto the reference's part of the frame).")]  # fmt: skip
+               "with the driver's contacts; then started where the reference stands and kept inside the picture).")]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 

@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from clone.choices import Method, StageMode
-from clone.drive.stage import StageFit, fit_to_stage
+from clone.drive.stage import StageFit, fit_to_stage, start_on_reference
+from clone.model.canvas import Canvas
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, file_sha256
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
@@ -129,7 +130,7 @@ def global_scale_to(driver: PoseTrack, target: ScaleStats, image_size: tuple[int
 
 def drive_poses(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+    device: str = "cpu", stage: StageMode | str = StageMode.FRAME, foot_lock: bool = True,
     refine_steps: int | None = None,
 ) -> tuple[PoseTrack, StageFit | None]:
     """The driver's poses in the reference's pixels, and how they were kept on the reference's stage.
@@ -144,8 +145,10 @@ def drive_poses(
         method: one of :data:`METHODS`.
         weights: retargeting weights (see :func:`retargeting_weights`).
         device: where the retargeting network runs.
-        stage: one of :data:`STAGES`: ``reference`` keeps the ``retarget`` and ``global-scale`` results on the
-            part of the frame the reference occupied (:func:`clone.drive.stage.fit_to_stage`); ``raw`` does not.
+        stage: one of :data:`STAGES` (:mod:`clone.drive.stage`): ``frame`` keeps the ``retarget`` and
+            ``global-scale`` results inside the model's picture with their travel (a retargeted track starting
+            where the reference stands), ``reference`` on the part of the frame the reference occupied, ``raw``
+            as the method gave them.
         foot_lock: clean up the ``retarget`` result's foot skating with the driver's foot contacts
             (:func:`pose_io.feet.lock_feet`), before the stage fit, which moves the whole track at once.
         refine_steps: motion-code refinement steps of ``retarget`` (see :func:`retarget_onto`).
@@ -169,7 +172,8 @@ def drive_poses(
         driven = retarget_onto(body, model, weights, device, refine_steps)
     else:
         driven = global_scale_onto(body, model)
-    driven, fit = finish_driven(driven, body, model.reference_track, method is Method.RETARGET, stage, foot_lock)
+    driven, fit = finish_driven(driven, body, model.reference_track, method is Method.RETARGET, stage, foot_lock,
+                                picture_of(model.canvas))
     if driver.layout == DETAIL_LAYOUT and model.pose_layout == DETAIL_LAYOUT:
         driven = with_details(driven, driver)
     return driven, fit
@@ -187,12 +191,25 @@ def with_details(driven: PoseTrack, driver: PoseTrack) -> PoseTrack:
     return PoseTrack(joints, confidence, driven.fps, driven.image_size, DETAIL_LAYOUT)
 
 
+def picture_of(canvas: Canvas) -> tuple[float, float, float, float]:
+    """``(x0, y0, x1, y1)`` in image pixels: what of the reference's frame its model's canvas shows."""
+    w, h = canvas.image_size
+    return (max(0.0, canvas.x0), max(0.0, canvas.y0), min(w - 1.0, canvas.x0 + canvas.side - 1.0),
+            min(h - 1.0, canvas.y0 + canvas.side - 1.0))
+
+
 def finish_driven(
     driven: PoseTrack, driver: PoseTrack, reference: PoseTrack, retargeted: bool,
-    stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+    stage: StageMode | str = StageMode.FRAME, foot_lock: bool = True,
+    picture: tuple[float, float, float, float] | None = None,
 ) -> tuple[PoseTrack, StageFit | None]:  # fmt: skip
     """What follows moving the driver onto the reference: a retargeted track's foot skating cleaned with the
-    driver's contacts (``foot_lock``), then the whole track kept on the reference's stage (``stage``).
+    driver's contacts (``foot_lock``), then (unless ``raw``) it starts where the reference stands, and the
+    whole track is kept in bounds (``stage``, :mod:`clone.drive.stage`).
+
+    Args:
+        picture: ``(x0, y0, x1, y1)``, the picture ``frame`` keeps the track in (default: the reference's
+            whole frame, ``reference.image_size``).
 
     Returns:
         ``(track, fit)`` as :func:`drive_poses`.
@@ -201,14 +218,22 @@ def finish_driven(
         from pose_io.feet import lock_feet
 
         driven = lock_feet(driven, driver)
-    if StageMode(stage) is StageMode.RAW:
+    stage = StageMode(stage)
+    if stage is StageMode.RAW:
         return driven, None
-    return fit_to_stage(driven, reference)
+    if retargeted:
+        driven = start_on_reference(driven, reference)
+    if stage is StageMode.REFERENCE:
+        return fit_to_stage(driven, reference)
+    if picture is None:
+        w, h = reference.image_size
+        picture = (0.0, 0.0, w - 1.0, h - 1.0)
+    return fit_to_stage(driven, reference, picture=picture)
 
 
 def move_onto_reference(
     driver: PoseTrack, model: ReferenceModel, method: Method | str, weights: str | os.PathLike | None = None,
-    device: str = "cpu", stage: StageMode | str = StageMode.REFERENCE, foot_lock: bool = True,
+    device: str = "cpu", stage: StageMode | str = StageMode.FRAME, foot_lock: bool = True,
     refine_steps: int | None = None,
 ) -> PoseTrack:
     """The driver's poses in the reference's pixels (see :func:`drive_poses`, which also says how far they

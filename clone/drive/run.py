@@ -46,7 +46,7 @@ class DriveResult:
     method: str
     poses_out: Path | None
     seconds: float
-    stage_share: float = 0.0  # share of frames that were off the reference's stage and moved onto it
+    stage_share: float = 0.0  # share of frames that were out of bounds (--stage) and moved in
     audio: Path | None = None  # the file whose sound the video carries
     coverage: Coverage | None = None  # how much of the drive the reference's own poses cover
 
@@ -69,7 +69,7 @@ def drive(
     *,
     model_path: str | os.PathLike = DEFAULT_MODEL,
     method: Method | str = Method.RETARGET,
-    stage: StageMode | str = StageMode.REFERENCE,
+    stage: StageMode | str = StageMode.FRAME,
     poses_out: str | os.PathLike | None = None,
     side_by_side: bool = False,
     device: torch.device | str = "cpu",
@@ -89,8 +89,8 @@ def drive(
         out: the ``.mp4`` to write (H.264, yuv420p, the driver's fps).
         model_path: the reference model from ``clone train-ref``.
         method: ``retarget``, ``global-scale`` or ``none``.
-        stage: ``reference``: keep the driven track on the part of the frame the reference occupied; ``raw``:
-            as the method left it (see :func:`drive_poses`).
+        stage: ``frame``: keep the driven track inside the model's picture with its travel; ``reference``: on
+            the part of the frame the reference occupied; ``raw``: as the method left it (see :func:`drive_poses`).
         poses_out: also write the driven body15 poses here (folder: OpenPose JSON; or ``.npz`` / ``.csv``).
         side_by_side: frames show driver skeleton | driven skeleton | result.
         device: where the networks run.

@@ -280,7 +280,7 @@ def make_report(
     weights: str | os.PathLike | None = None,
     max_gap: int = 5,
     progress: Callable[[int, int], None] | None = None,
-    stage: str = "reference",
+    stage: str = "frame",
     refine_steps: int | None = None,
     audio: str | os.PathLike | None = "auto",
     consistency: bool | None = None,
@@ -298,7 +298,7 @@ def make_report(
         weights: retargeting weights (default: see ``clone.drive.poses.retargeting_weights``).
         max_gap: fill driver gaps of at most this many frames.
         progress: called with (frames done, total) after every frame.
-        stage: ``reference`` or ``raw`` (see ``clone.drive.poses.drive_poses``).
+        stage: ``frame``, ``reference`` or ``raw`` (see ``clone.drive.poses.drive_poses``).
         refine_steps: motion-code refinement steps of the retargeted row (None: inference's default; 0: none).
         audio: the video's sound: ``auto`` the driver's when it is a video with sound, ``none`` silent, else a
             file (see :func:`pose_io.audio.resolve_audio`).

@@ -290,7 +290,7 @@ def test_stage_keeps_the_driven_poses_where_the_reference_stood_unless_raw(train
     driven = read_track(driver).to_layout("body15")
     np.testing.assert_allclose(raw.joints, move_onto_reference(driven, model, "global-scale", stage="raw").joints,
                                atol=1e-3)
-    track, fit = drive_poses(driven, model, "global-scale")
+    track, fit = drive_poses(driven, model, "global-scale", stage="reference")
     assert fit is not None and fit.moved and f"{100 * fit.share:.1f}% of frames" in said
     np.testing.assert_allclose(kept.joints, track.joints, atol=1e-3)
     assert drive_poses(driven, model, "none")[1] is None
@@ -300,10 +300,10 @@ def test_stage_keeps_the_driven_poses_where_the_reference_stood_unless_raw(train
 def test_bad_stage_is_one_line_error(trained, driver, tmp_path):
     out = tmp_path / "o.mp4"
     line = one_line_error(CliRunner().invoke(app, drive_args(driver, out, trained, "--stage", "floor")))
-    assert "--stage" in line and "valid: reference, raw" in line
+    assert "--stage" in line and "valid: frame, reference, raw" in line
     assert not out.exists()
     model = load_reference_model(trained)
-    with pytest.raises(InputError, match="valid: reference, raw"):
+    with pytest.raises(InputError, match="valid: frame, reference, raw"):
         drive_poses(read_track(driver), model, "global-scale", stage="floor")
 
 

@@ -7,7 +7,14 @@ import logging
 import numpy as np
 import pytest
 
-from clone.drive.stage import StageConfig, StageFit, fit_interval, fit_to_stage, reference_stage
+from clone.drive.stage import (
+    StageConfig,
+    StageFit,
+    fit_interval,
+    fit_to_stage,
+    reference_stage,
+    start_on_reference,
+)
 from pose_io import BODY15, PoseTrack
 from pose_io.measures import foot_points
 
@@ -176,3 +183,47 @@ def test_a_reference_that_looks_smaller_when_closer_gives_no_falling_size_line()
     assert reference_stage(reference()).slope == pytest.approx(20 / 60, rel=0.1)  # EDN end-band estimates
     steep = figure(200 + 100 * s, 300 + 60 * s, 60 + 300 * s)
     assert reference_stage(steep).slope == StageConfig().max_slope
+
+
+PICTURE = (0.0, 0.0, SIZE[0] - 1.0, SIZE[1] - 1.0)
+
+
+def test_in_the_picture_a_walk_wider_than_the_stage_keeps_its_travel():
+    ref = reference()
+    walk = figure(np.linspace(100, 500, 60), np.linspace(330, 380, 60), 110.0)  # 4x the reference's range
+    out, fit = fit_to_stage(walk, ref, picture=PICTURE)
+    assert out is walk and not fit.moved and fit.share == 0.0
+    assert fit_to_stage(walk, ref)[1].x_scale < 0.5  # on the reference's stage it is squeezed
+
+
+def test_in_the_picture_a_track_leaving_it_is_shifted_back_whole_and_compressed_only_if_wider():
+    ref = reference()
+    margin = reference_stage(ref).margin
+    walk = figure(np.linspace(300, 700, 60), np.full(60, 330.0), 110.0)  # walks off the right edge
+    out, fit = fit_to_stage(walk, ref, picture=PICTURE)
+    assert fit.moved and fit.x_scale == 1.0 and fit.x_shift < 0 and fit.share > 0.1
+    np.testing.assert_allclose(out.joints - walk.joints, np.broadcast_to([fit.x_shift, 0.0], walk.joints.shape),
+                               atol=1e-3)
+    assert np.nanmax(out.joints[..., 0]) == pytest.approx(SIZE[0] - 1 - margin, abs=1e-3)
+    wide = figure(np.linspace(-400, 1000, 60), np.full(60, 330.0), 110.0)  # wider than the picture
+    out, fit = fit_to_stage(wide, ref, picture=PICTURE)
+    assert 0 < fit.x_scale < 1
+    x = out.joints[..., 0]
+    assert np.nanmin(x) >= margin - 1e-3 and np.nanmax(x) <= SIZE[0] - 1 - margin + 1e-3
+    np.testing.assert_allclose(np.diff(root_x(out), 2), 0.0, atol=1e-3)  # one map: the velocity stays constant
+    # a jump above the top edge brings the whole track down by the same amount
+    high = figure(np.full(30, 250.0), np.full(30, 100.0), 110.0)
+    out, fit = fit_to_stage(high, ref, picture=PICTURE)
+    assert fit.foot_shift > 0 and np.nanmin(out.joints[..., 1]) == pytest.approx(margin, abs=1.0)
+
+
+def test_a_retargeted_track_starts_where_the_reference_stands():
+    ref = reference()
+    walk = figure(np.linspace(0, 400, 50), np.linspace(380, 400, 50), 110.0)
+    out = start_on_reference(walk, ref)
+    start = slice(0, round(0.5 * walk.fps))
+    assert np.median(root_x(out)[start]) == pytest.approx(np.median(root_x(ref)), abs=1e-3)
+    assert np.median(foot_y(out)[start]) == pytest.approx(np.median(foot_y(ref)), abs=1e-3)
+    np.testing.assert_allclose(np.diff(out.joints, axis=0), np.diff(walk.joints, axis=0), atol=1e-3)  # same travel
+    nobody = walk.replace(confidence=np.zeros_like(walk.confidence))
+    assert start_on_reference(nobody, ref) is nobody
