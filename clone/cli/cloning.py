@@ -69,7 +69,8 @@ def train_ref(
     init: Annotated[str | None, typer.Option(
         "--init", help="Start the new model from the generator (and discriminator, face pass) of this model "
         "file, trained on anyone with the same --size and options, or a `clone train-prior` prior; none: random "
-        "weights (default).")] = None,
+        "weights. Default: the shipped generator prior where it fits (--size 256 with the default options), "
+        "else random weights.")] = None,
     align: Annotated[Align, typer.Option(
         "--align", parser=Align, help="exact: frame and pose counts must agree; trim: use the common prefix.")
     ] = Align.EXACT,
@@ -133,6 +134,8 @@ def train_ref(
             raise InputError(f"FRAMES: needed when REF_POSES is not a video ({ref_poses})")
         frames = ref_poses
     init_path = None if init is None or init.lower() == "none" else Path(init)
+    if init is not None and init.lower() == "auto":
+        raise InputError("--init auto: leave --init out for the shipped prior where it fits")
     if init_path is not None and resume:
         raise InputError("--init starts a new model; --resume continues one: pass only one of them")
     for name, path in (("REF_POSES", ref_poses), ("FRAMES", frames), ("--weights", weights), ("--init", init_path)):
@@ -176,6 +179,12 @@ def train_ref(
                              pose_layout="body15" if details is False else "body31",
                              face_pass=False if details is False else face_pass,
                              loss=LossConfig(face_gan=face_gan or 0.0))
+        if init is None:
+            from clone.train_ref.prior import matching_prior
+
+            init_path = matching_prior(config)
+            if init_path is not None:
+                console.print("starting from the shipped generator prior (--init none: random weights)")
 
     with distributed.launched(dev) as dev, \
             progress_bar("train-ref", count=False, elapsed=True, enabled=distributed.current().is_main) as bar:

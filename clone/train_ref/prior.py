@@ -12,8 +12,8 @@ dataset (:class:`PerformerData`); a step samples across them.
 
 The run is a `clone train-ref` run in every other way (same trainer, losses, schedule, checkpoint: ``--resume``
 continues it from the same performers, which are drawn from the seed). :func:`export_prior` writes the compact
-file: no optimiser state, float16 weights. None is shipped: the one measured (docs/cloning.md) cost held-out quality
-on real references.
+file: no optimiser state, float16 weights. The shipped one (:data:`PACKAGED_PRIOR`: one-colour shirts, measured in
+docs/cloning.md) is where `clone train-ref` starts a model whose size and options it fits.
 """
 
 from __future__ import annotations
@@ -53,6 +53,9 @@ from retarget.world.rigs import load_motion
 from retarget.world.turns import draw_turn
 
 log = logging.getLogger(__name__)
+
+# The shipped prior (``export_prior`` of a `clone train-prior` run; how it was trained: docs/cloning.md).
+PACKAGED_PRIOR = Path(__file__).resolve().parent.parent / "data" / "generator_prior_256.pt"
 
 
 @dataclass(frozen=True)
@@ -290,6 +293,21 @@ def export_prior(path: str | os.PathLike, out: str | os.PathLike, overwrite: boo
     compact = replace(model, generator_state=_half(model.generator_state), face_pass=face_pass, training=kept)
     save_reference_model(compact, out, overwrite=overwrite)
     return Path(out)
+
+
+def matching_prior(config: TrainConfig, path: str | os.PathLike | None = None) -> Path | None:
+    """The generator prior at ``path`` (default: the shipped one) when a run of ``config`` can start from it
+    (the same generator and pose layout, see :func:`clone.train_ref.checkpoint.load_init`), else None."""
+    from clone.train_ref.checkpoint import generator_differences
+
+    path = Path(path) if path is not None else PACKAGED_PRIOR
+    if not path.is_file():
+        return None
+    try:
+        model = load_reference_model(path)
+    except InputError:
+        return None
+    return None if generator_differences(model, config) else path
 
 
 def _half(state: dict[str, Tensor]) -> dict[str, Tensor]:

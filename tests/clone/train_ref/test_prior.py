@@ -15,8 +15,9 @@ from clone.cli.main import app
 from clone.model.reference import load_reference_model
 from clone.model.tensors import to_tensor
 from clone.train_ref import TrainConfig, train_reference
+from clone.train_ref import prior as prior_module
 from clone.train_ref.checkpoint import load_init
-from clone.train_ref.prior import PriorConfig, export_prior, render_performers, train_prior
+from clone.train_ref.prior import PriorConfig, export_prior, matching_prior, render_performers, train_prior
 from pose_io.errors import InputError
 from tests.clone.test_cli_synth import write_walk_bvh
 from tests.clone.train_ref.helpers import one_line_error, train_args
@@ -104,16 +105,23 @@ def _reference(tmp_path: Path) -> tuple[Path, Path]:
     return write_reference(tmp_path / "figure", figure_track())
 
 
-def test_train_ref_starts_from_a_prior(mocap: Path, tmp_path: Path, reference) -> None:
+def test_train_ref_starts_from_the_shipped_prior_where_it_fits(mocap: Path, tmp_path: Path, monkeypatch,
+                                                               reference) -> None:
     run, small = tmp_path / "run.pt", tmp_path / "prior.pt"
     # another seed than the reference runs' (whose random weights are seed 0's)
     train_prior(mocap, run, config=TrainConfig(size=32, seed=7), prior=SMALL, steps=2)
     export_prior(run, small)
+    assert matching_prior(TrainConfig(size=32), small) == small
+    assert matching_prior(TrainConfig(size=64), small) is None
+    assert matching_prior(TrainConfig(size=32, pose_layout="body15"), small) is None
+    monkeypatch.setattr(prior_module, "PACKAGED_PRIOR", small)
     poses, frames = reference
-    result = CliRunner().invoke(app, train_args(poses, frames, tmp_path / "a.pt", "--init", str(small), steps=1))
-    assert result.exit_code == 0, result.output
-    result = CliRunner().invoke(app, train_args(poses, frames, tmp_path / "b.pt", steps=1))
-    assert result.exit_code == 0, result.output
+    result = CliRunner().invoke(app, train_args(poses, frames, tmp_path / "a.pt", steps=1))
+    assert result.exit_code == 0 and "shipped generator prior" in result.output, result.output
+    result = CliRunner().invoke(app, train_args(poses, frames, tmp_path / "b.pt", "--init", "none", steps=1))
+    assert result.exit_code == 0 and "prior" not in result.output, result.output
+    result = CliRunner().invoke(app, train_args(poses, frames, tmp_path / "d.pt", "--init", str(small), steps=1))
+    assert result.exit_code == 0 and "shipped" not in result.output, result.output
     prior_g = load_reference_model(small).build_generator().state_dict()
 
     def distance(path: Path) -> float:
@@ -121,11 +129,22 @@ def test_train_ref_starts_from_a_prior(mocap: Path, tmp_path: Path, reference) -
         return sum(float((g[k] - prior_g[k]).abs().sum()) for k in g)
 
     assert distance(tmp_path / "a.pt") < 0.05 * distance(tmp_path / "b.pt")
-    # a prior of another size does not fit
-    args = ["train-ref", str(poses), str(frames), "--out", str(tmp_path / "c.pt"), "--size", "64", "--steps", "1",
-            "--threads", "1", "--device", "cpu", "--init", str(small)]
-    line = one_line_error(CliRunner().invoke(app, args))
+    assert distance(tmp_path / "d.pt") < 0.05 * distance(tmp_path / "b.pt")
+    # another size does not fit it: random weights, no line; named with --init it is an error
+    args = ["train-ref", str(poses), str(frames), "--size", "64", "--steps", "1", "--threads", "1", "--device", "cpu"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "c.pt")])
+    assert result.exit_code == 0 and "prior" not in result.output, result.output
+    line = one_line_error(CliRunner().invoke(app, [*args, "--out", str(tmp_path / "e.pt"), "--init", str(small)]))
     assert "--init" in line
+
+
+def test_the_shipped_prior_fits_train_ref_at_256_with_the_default_options() -> None:
+    assert prior_module.PACKAGED_PRIOR.is_file()
+    assert prior_module.PACKAGED_PRIOR.stat().st_size < 20 * 2**20  # the package grows by at most 20 MB
+    assert matching_prior(TrainConfig(size=256)) == prior_module.PACKAGED_PRIOR
+    assert matching_prior(TrainConfig(size=128)) is None
+    stored = load_reference_model(prior_module.PACKAGED_PRIOR).training["prior"]
+    assert PriorConfig.stored(stored).plain_share == 1.0  # the one measured: one-colour shirts
 
 
 def test_train_prior_command(mocap: Path, tmp_path: Path) -> None:
