@@ -31,6 +31,7 @@ and velocities stay continuous; no frame is clamped on its own, which would make
 from __future__ import annotations
 
 import logging
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -165,7 +166,8 @@ def picture_stage(track: PoseTrack, root_x: np.ndarray, foot_y: np.ndarray, stag
     """The stage of a whole picture ``(x0, y0, x1, y1)``: where ``track``'s root x and foot line may go so that
     every joint stays ``stage.margin`` inside it; the reference's height line is kept."""
     joints = track.joints.astype(np.float64)  # [T, J, 2]
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():  # a frame without anybody in it has no extent (NaN), and is ignored
+        warnings.simplefilter("ignore", category=RuntimeWarning)
         left = float(np.nanmax(root_x - np.nanmin(joints[..., 0], axis=1)))
         right = float(np.nanmax(np.nanmax(joints[..., 0], axis=1) - root_x))
         up = float(np.nanmax(foot_y - np.nanmin(joints[..., 1], axis=1)))

@@ -227,3 +227,13 @@ def test_a_retargeted_track_starts_where_the_reference_stands():
     np.testing.assert_allclose(np.diff(out.joints, axis=0), np.diff(walk.joints, axis=0), atol=1e-3)  # same travel
     nobody = walk.replace(confidence=np.zeros_like(walk.confidence))
     assert start_on_reference(nobody, ref) is nobody
+
+
+def test_in_the_picture_frames_without_anybody_are_carried_quietly(recwarn):
+    walk = figure(np.linspace(300, 700, 30), np.full(30, 330.0), 110.0)
+    joints = walk.joints.copy()
+    joints[10] = np.nan  # nobody in this frame
+    holes = walk.replace(joints=joints, confidence=np.where(np.isnan(joints[..., 0]), 0, 1).astype(np.float32))
+    out, fit = fit_to_stage(holes, reference(), picture=PICTURE)
+    assert fit.moved and np.isnan(out.joints[10]).all() and np.isfinite(out.joints[11]).all()
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
