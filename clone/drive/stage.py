@@ -13,10 +13,10 @@ its new foot line.
 ``reference`` is for a generator that should only paint where it saw the reference: a driven trajectory that
 walks off that part of the frame (or towards the camera) asks it for something it never learnt, but squeezing
 a walk into a small range makes the feet slide and misplaces the body (docs/cloning.md measures both). The
-reference's stage is the robust
-range (2nd to 98th percentile) of its root's (``mid_hip``) horizontal positions and of its foot line (the lower
-ankle's image y), and how its apparent height changes along that line: linearly in the foot's y between the
-farthest and the closest position, as in Everybody Dance Now's normalisation (:mod:`retarget.baselines.global_scale`).
+reference's stage is the robust range (2nd to 98th percentile) of its root's (``mid_hip``) horizontal positions
+and of its foot line (the lower ankle's image y), and how its apparent height changes along that line: linearly
+in the foot's y between the farthest and the closest position, as in Everybody Dance Now's normalisation
+(:mod:`retarget.baselines.global_scale`).
 
 A track already in bounds is returned unchanged. Otherwise each axis gets ONE affine map of its whole
 trajectory (a shift when the track's range fits, else a shift and a compression), so the motion keeps its shape
@@ -239,7 +239,7 @@ def fit_to_stage(
     joints = track.joints.astype(np.float64)  # [T, J, 2]
     new_foot = foot_scale * foot_y + foot_shift  # [T]
     # [T] EDN change of apparent size with depth, on the reference's stage; in the picture the map only keeps
-    # the body in view (a jump near the top edge is no step away from the camera), so sizes stay
+    # the body in view (a jump near the top edge is no step away from the camera), so sizes stay as they are
     k = np.ones_like(foot_y) if picture is not None else stage.height(new_foot) / stage.height(foot_y)
     out = np.empty_like(joints)
     out[..., 0] = root_x[:, None] + k[:, None] * (joints[..., 0] - root_x[:, None])
