@@ -1,16 +1,18 @@
 """Stage `real` (opt-in): held-out reconstruction of real people, one row per reference video in ../shared/real.
 
 For each fashion reference (``ubc_*.mp4``): MediaPipe poses of the whole video (cached by content); the first 80 %
-of the frames train ``clone train-ref`` at a 256² canvas for ``--minutes`` (default 3, ``--quick`` 1; two
-threads); the last 20 %, never trained on, are driven back from their own poses (``--method none``, as `clone
-drive` does it) and compared with the real frames cut to the model's canvas:
+of the frames train a 256² model as ``clone train-ref`` does, for each budget of ``--minutes`` (default 3,
+``--quick`` 1, e.g. ``--minutes 1,3,10``; two threads) and from each start: the shipped generator prior (the
+command's default) and random weights (``--init none``). The last 20 %, never trained on, are driven back from
+their own poses (``--method none``, as `clone drive` does it) and compared with the real frames cut to the model's
+canvas:
 
 - SSIM / PSNR of the whole canvas, of the person's box (the pose's box and 15 % around it) and SSIM of the face's
   box (around the nose, eyes, ears and mouth, a sixth of the body's height across);
 - flicker: the mean absolute change between consecutive frames inside the person's box, generated against the
   real video's own (1.0: as steady as the real footage);
-- pose consistency when the real dancer (``dance_musepose.mp4``) drives the model, retargeted and by global
-  scaling: MediaPipe on the generated frames against the driven poses, PCK@0.1 and median error.
+- pose consistency when the real dancer (``dance_musepose.mp4``) drives the model (`clone drive`'s defaults),
+  retargeted and by global scaling: MediaPipe on the generated frames against the driven poses, PCK@0.1 and median error.
 
 Baseline: the same measures for the model's background plate alone (no person), against the same frames.
 ``run(strips=DIR)`` also writes real | generated strips of held-out frames into DIR, to look at (they show the
@@ -20,6 +22,8 @@ The videos are test material: they are read from ../shared/real, never copied.
 
 from __future__ import annotations
 
+import json
+import logging
 import shutil
 import tempfile
 import time
@@ -28,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+log = logging.getLogger("bench.real")
 SHARED_REAL = Path(__file__).resolve().parents[2] / "shared" / "real"
 SIZE = 256
 HELD_OUT = 0.2
@@ -124,26 +129,44 @@ def drive_consistency(model_path: Path, driver_video: Path, method: str) -> dict
 
     model = load_reference_model(model_path)
     driver = read_driver(driver_video, 5, layout=model.pose_layout)
-    driven, _ = drive_poses(driver, model, method, None, "cpu", "reference", True, None)
+    driven, _ = drive_poses(driver, model, method)
     frames = [frame for _map, frame in generate_frames(model, driven, "cpu")]
     body = image_to_canvas(driven.to_layout("body15").joints, model.canvas)
     return pose_consistency(frames, body, driven.fps)
 
 
-def run(quick: bool = False, minutes: float | None = None, strips: Path | None = None, **_: object
+STARTS = {"prior": "from the shipped prior", "none": "from random weights (--init none)"}
+
+
+def budgets(quick: bool, minutes: float | str | None) -> list[float]:
+    """Training budgets in minutes: ``minutes`` (a number or a comma-separated list), else 1 (quick) or 3."""
+    if minutes is None:
+        return [1.0 if quick else 3.0]
+    values = [float(m) for m in str(minutes).split(",") if m.strip()]
+    if not values or not all(0 < m < 600 for m in values):
+        raise ValueError(f"minutes {minutes!r}: give one or more budgets, each above 0 and below 600")
+    return values
+
+
+def run(quick: bool = False, minutes: float | str | None = None, strips: Path | None = None, **_: object
         ) -> dict[str, Any]:
     import torch
 
     from bench.harness import row
     from clone.train_ref import TrainConfig, train_reference
+    from clone.train_ref.prior import matching_prior
     from pose_io.readers import read_track
     from pose_io.writers import write_track
 
     videos = sorted(SHARED_REAL.glob("ubc_*.mp4"))
     if not videos:
         return {"skipped": f"no reference videos in {SHARED_REAL}"}
-    budget = minutes if minutes is not None else (1.0 if quick else 3.0)
+    config = TrainConfig(size=SIZE, seed=0)
+    prior = matching_prior(config)
+    starts = [s for s in STARTS if s != "prior" or prior is not None]
     torch.set_num_threads(2)
+    if strips is not None:
+        Path(strips).mkdir(parents=True, exist_ok=True)
     rows = []
     tmp = Path(tempfile.mkdtemp(prefix="bench_real_"))
     try:
@@ -151,24 +174,29 @@ def run(quick: bool = False, minutes: float | None = None, strips: Path | None =
             track = read_track(video)
             start = round(track.num_frames * (1 - HELD_OUT))
             poses = write_track(track.frames(0, start), tmp / f"{video.stem}.npz")
-            model = tmp / f"{video.stem}.pt"
-            t0 = time.perf_counter()
-            result = train_reference(poses, video, model, config=TrainConfig(size=SIZE, seed=0), minutes=budget,
-                                     device="cpu", align="trim")
-            seconds = time.perf_counter() - t0
-            scores = measure(model, track, video, start,
-                             None if strips is None else Path(strips) / f"real_{video.stem}.png")
-            dancer = SHARED_REAL / "dance_musepose.mp4"
-            if dancer.is_file():
-                for method in ("retarget", "global-scale"):
-                    for key, value in drive_consistency(model, dancer, method).items():
-                        scores[f"dancer_{method}_{key}"] = value
-            rows.append(row(
-                f"real reference {video.name}: last {HELD_OUT:.0%} of frames held out, {SIZE}² canvas",
-                f"{budget:g} min of train-ref", scores["person_ssim"], "person box SSIM",
-                baseline=scores["plate_person_ssim"], baseline_variant="the background plate alone",
-                **scores, steps=result.steps, train_seconds=round(seconds, 1), frames_trained=start,
-            ))
+            for budget in budgets(quick, minutes):
+                for begin in starts:
+                    model = tmp / f"{video.stem}_{budget:g}_{begin}.pt"
+                    t0 = time.perf_counter()
+                    result = train_reference(poses, video, model, config=config, minutes=budget, device="cpu",
+                                             align="trim", init=prior if begin == "prior" else None)
+                    seconds = time.perf_counter() - t0
+                    strip = None if strips is None else Path(strips) / f"real_{video.stem}_{budget:g}_{begin}.png"
+                    scores = measure(model, track, video, start, strip)
+                    dancer = SHARED_REAL / "dance_musepose.mp4"
+                    if dancer.is_file():
+                        for method in ("retarget", "global-scale"):
+                            for key, value in drive_consistency(model, dancer, method).items():
+                                scores[f"dancer_{method}_{key}"] = value
+                    rows.append(row(
+                        f"real reference {video.name}: last {HELD_OUT:.0%} of frames held out, {SIZE}² canvas",
+                        f"{budget:g} min of train-ref {STARTS[begin]}", scores["person_ssim"], "person box SSIM",
+                        baseline=scores["plate_person_ssim"], baseline_variant="the background plate alone",
+                        **scores, steps=result.steps, train_seconds=round(seconds, 1), frames_trained=start,
+                    ))
+                    log.info("%s", json.dumps({"video": video.name, "minutes": budget, "start": begin,
+                                               "steps": result.steps, **scores}))  # a long run's rows, as they come
+                    model.unlink(missing_ok=True)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return {"rows": rows}

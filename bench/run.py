@@ -4,6 +4,7 @@
     python -m bench.run --only draw,startup  # some stages; other stages already in results.json are kept
     python -m bench.run --quick              # smaller tracks, fewer repeats
     python -m bench.run --only train_quality # opt-in: SSIM after 1, 3, 10 minutes of training
+    python -m bench.run --only real --minutes 1,10 --strips /tmp/strips  # opt-in: real people, these budgets
 
 Writes ``results.json`` and ``results.md`` into ``--out`` (default: this folder). Each row carries the
 1/5/15-minute load average when it was measured: the machine is shared, so absolute figures move with
@@ -69,13 +70,14 @@ def cpu_info() -> dict[str, object]:
     return {"cpu_model": model, "cpu_flags": [f for f in wanted if f in flags]}
 
 
-def run_stage(name: str, quick: bool, repeats: int | None) -> dict[str, Any]:
-    """Run one stage; a failure is recorded in the result rather than stopping the others."""
+def run_stage(name: str, quick: bool, repeats: int | None, **options: object) -> dict[str, Any]:
+    """Run one stage (``options``: the stage-specific ones given, e.g. ``minutes``); a failure is recorded in the
+    result rather than stopping the others."""
     module = importlib.import_module(STAGES[name][0])
     before = load_average()
     t0 = time.perf_counter()
     try:
-        result = module.run(quick=quick, repeats=repeats)
+        result = module.run(quick=quick, repeats=repeats, **{k: v for k, v in options.items() if v is not None})
     except Exception as exc:  # noqa: BLE001 - report and go on with the other stages
         log.error("stage %s failed: %s", name, exc)
         result = {"rows": [], "notes": [], "error": "".join(traceback.format_exception_only(exc)).strip(),
@@ -162,6 +164,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="smaller tracks, fewer repeats")
     parser.add_argument("--out", type=Path, default=HERE, help="folder for results.json / results.md")
     parser.add_argument("--repeats", type=int, default=None, help="override repeats where a stage supports it")
+    parser.add_argument("--minutes", help="training budgets of the `real` stage, e.g. 1,3,10 (default 3)")
+    parser.add_argument("--strips", type=Path, default=None,
+                        help="`real` stage: write real | generated strips of held-out frames into this folder")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     try:
@@ -176,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     done: dict[str, Any] = {}
     for name in names:
         log.info("stage %s (load average %s)", name, load_average())
-        done[name] = run_stage(name, args.quick, args.repeats)
+        done[name] = run_stage(name, args.quick, args.repeats, minutes=args.minutes, strips=args.strips)
         path = write_results(args.out, {name: done[name]}, machine, load_start)  # partial results survive
         log.info("stage %s: %s s%s", name, done[name]["seconds"], " FAILED" if done[name].get("error") else "")
     print((args.out / "results.md").read_text())

@@ -148,3 +148,25 @@ def test_stage_selection():
     assert select("train_quality") == ["train_quality"]  # opt-in stages run when named
     with pytest.raises(ValueError, match="unknown stage\\(s\\) nope, zzz; valid: " + ", ".join(STAGES)):
         select("nope,draw,zzz")
+
+
+def test_real_stage_budgets():
+    from bench.real import budgets
+
+    assert budgets(False, None) == [3.0] and budgets(True, None) == [1.0]
+    assert budgets(False, "1,3,10") == [1.0, 3.0, 10.0] and budgets(False, 2.5) == [2.5]
+    for bad in ("0", "", "1,-2", "900"):
+        with pytest.raises(ValueError, match="budgets"):
+            budgets(False, bad)
+
+
+def test_stage_options_reach_the_stage(fake_stage):
+    seen = {}
+
+    def stage(**kwargs):
+        seen.update(kwargs)
+        return {"rows": []}
+
+    fake_stage.run = stage
+    bench_run.run_stage("fake", quick=True, repeats=None, minutes="1,10", strips=None)
+    assert seen["minutes"] == "1,10" and "strips" not in seen and seen["quick"] is True
