@@ -48,18 +48,21 @@ def eval_cloning(
     turns: Annotated[bool, typer.Option("--turns/--no-turns", help="Also a turning driver per clip: the child at "
                      "-30° turning its whole body by 90-360° during the case, its truth turning alike (kind "
                      "'turn', apart from 'all').")] = True,
+    travelling: Annotated[bool, typer.Option("--travel/--no-travel", help="Also a travelling driver on every clip "
+                          "that walks across: the child 50° from the reference's camera in a picture three times as "
+                          "wide, turning on every other such clip (kind 'travel', apart from 'all').")] = True,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out.")] = False,
 ) -> None:
     """Pose error and placement of retargeting weights on `clone demo`'s three pairs built from every clip of a split.
 
     Each usable clip of the split gives the demo's drivers (the child at +30°, the reference's own body at -30°,
     the child at -30°) and their ground truth (the demo's reference character at +30°), and a turning driver (the
-    child at -30° turning by 90-360°; --no-turns leaves it out); every driver is moved onto the demo's reference
-    track as `clone drive` does it. Global scaling is scored on the same cases.
+    child at -30° turning by 90-360°; --no-turns leaves it out) and, on clips that walk across, a travelling
+    driver in a wide picture (--no-travel leaves it out); every driver is moved onto the demo's reference track
+    as `clone drive` does it. Global scaling is scored on the same cases.
     """
 
     from clone.demo import validation
-    from clone.demo.scenes import reference_track
     from pose_io.atomic import atomic_dir
     from pose_io.errors import InputError
     from pose_io.outputs import FOLDER, check_number, check_output
@@ -77,13 +80,14 @@ def eval_cloning(
     networks.update(named_checkpoints(compare, taken=("ours", "global scaling (EDN)")))
     configure_threads(threads)
     config = validation.DEMO
-    reference = reference_track(config)
+    references = validation.references(config)
     # Weights and device are checked before the world is built.
-    methods = {name: validation.network_drive(path, reference, device) for name, path in networks.items()}
-    methods["global scaling (EDN)"] = validation.global_scale_drive(reference)
+    methods = {name: validation.network_drive(path, references, device) for name, path in networks.items()}
+    methods["global scaling (EDN)"] = validation.global_scale_drive(references)
+    wide = validation.picture_size(config, validation.WIDE)
     world = MotionWorld.build(mocap, cache, seed=world_seed)
     cases = validation.cloning_cases(world.split(split.value).clips, mocap, frames, clips, config,
-                                     world.config.fps, turns=turns)  # fmt: skip
+                                     world.config.fps, turns=turns, travelling=travelling)  # fmt: skip
     with progress_bar("eval-cloning") as bar:
         errors = validation.score(cases, methods, lambda done, _: bar(done, len(cases)))
     doc = validation.summarise(cases, errors, "ours")
@@ -92,9 +96,12 @@ def eval_cloning(
         "weights": {name: str(path or PACKAGED_WEIGHTS) for name, path in networks.items()},
         "pairs": "; ".join([f"{p.name}: {p.character} at {p.yaw:+g}°" for p in config.pairs]
                            + ([(f"{validation.TURN_KIND}: {validation.TURN_CHARACTER} at {validation.TURN_YAW:+g}° "
-                                "turning by 90-360° (apart from 'all')")] if turns else [])),
+                                "turning by 90-360° (apart from 'all')")] if turns else [])
+                           + ([(f"{validation.TRAVEL_KIND}: {validation.TRAVEL_CHARACTER} at "
+                                f"{validation.TRAVEL_YAW:+g}° walking across a {'x'.join(map(str, wide))} picture, "
+                                "turning on every other clip (apart from 'all')")] if travelling else [])),
         "reference": f"{config.reference_character} performing the built-in {config.reference_motion!r} motion at "
-                     f"{config.reference_yaw:+g}°, {len(reference)} frames",
+                     f"{config.reference_yaw:+g}°, {len(references[validation.SQUARE])} frames",
         "case_list": [{"clip": c.clip, "kind": c.kind,
                        **{key: {n: float(e[k]) for n, e in rows.items()} for key, rows in errors.items()}}
                       for k, c in enumerate(cases)],

@@ -62,14 +62,16 @@ def ground_truth_track(config: DemoConfig, pair: PairConfig, motions: dict[str, 
     return track
 
 
-def reference_track(config: DemoConfig, motions: dict[str, object] | None = None) -> PoseTrack:
-    """The exact BODY_25 poses of the demo's reference video (no frames are rendered)."""
+def reference_track(config: DemoConfig, motions: dict[str, object] | None = None,
+                    size: tuple[int, int] | None = None) -> PoseTrack:
+    """The exact BODY_25 poses of the demo's reference video (no frames are rendered); ``size``: in a frame of
+    this (width, height) instead of the demo's square one, the camera as far (the body as large)."""
     from clone.synth import get_character
     from clone.synth.performance import render_performance
 
     skeleton, look, _ = get_character(config.reference_character)
     motion = _motion(motions or demo_motions(), config.reference_motion)
-    return render_performance(motion, skeleton, look, yaw=config.reference_yaw, size=config.render_size,
+    return render_performance(motion, skeleton, look, yaw=config.reference_yaw, size=size or config.render_size,
                               frames=config.reference_frames)[1]  # fmt: skip
 
 

@@ -6,7 +6,11 @@ becomes the demo's three drivers (:data:`clone.demo.config.PAIRS`: the child at 
 the reference's camera (+30°), kept only when it stays inside the frame as the demo's do. With ``turns``, a fourth
 driver of kind ``turn``: the child at -30° turning its whole body by 90-360° either way during the case (one turn
 drawn per clip, :func:`retarget.world.turns.draw_turn`), its truth turning alike: real dancers and fashion models
-turn, the world's clips rarely do. Every driver is moved
+turn, the world's clips rarely do. With ``travel``, a driver of kind ``travel`` on every clip whose body travels
+across the picture (at least half its height over the case): the child 50° from the reference's camera, turning as
+the turning driver does on every other such clip, in a picture three times as wide as high (the demo's reference
+rendered alike), its truth walking as far: a driver who walks across a room must keep its travel on the
+reference's stage. Every driver is moved
 onto the demo's reference track (:func:`clone.demo.scenes.reference_track`) the way `clone drive` does: the network
 with the reference's skeleton and view codes, the foot skating cleaned with the driver's contacts, the track
 started where the reference stands and kept inside the picture (:func:`clone.drive.poses.finish_driven`). The scores are the demo's primary measure, the RMSE of
@@ -35,7 +39,7 @@ from retarget.evaluate.scores import mean_se
 
 log = logging.getLogger(__name__)
 
-Drive = Callable[[PoseTrack], PoseTrack]  # driver track -> driven track in the reference's pixels
+Drive = Callable[["CloningCase"], PoseTrack]  # a case -> its driver moved onto the reference, in its pixels
 
 # The demo whose pairs are copied (frozen, so a shared default is safe).
 DEMO = DemoConfig()
@@ -45,6 +49,15 @@ CASE_START = 15
 TURN_KIND = "turn"
 TURN_CHARACTER, TURN_YAW = "child", -30.0
 TURN_SEED = 2019
+# The travelling driver: its kind, body and camera (50° from the reference's), the picture's width in heights, the
+# least travel of the truth's MidHip (share of its height) that makes a clip one, and the seed of its turns.
+TRAVEL_KIND = "travel"
+TRAVEL_CHARACTER, TRAVEL_YAW = "child", -20.0
+TRAVEL_WIDTH = 3
+TRAVEL_LEAST = 0.5
+TRAVEL_SEED = 7
+# The pictures a case is set in: the demo's square frame, and the travelling driver's wide one.
+SQUARE, WIDE = "square", "wide"
 
 
 @dataclass(frozen=True)
@@ -56,17 +69,43 @@ class CloningCase:
         kind: the demo pair it copies (``proportions``, ``view``, ``both``).
         driver: the driver's track as `clone drive` reads it (:func:`clone.drive.poses.driver_track`).
         truth: the reference character performing the same frames, seen by the reference's camera (body15).
+        picture: the frame the case is set in (:data:`SQUARE`, the demo's; :data:`WIDE`, the travelling one's),
+            the reference it is driven onto rendered alike (:func:`references`).
     """
 
     clip: str
     kind: str
     driver: PoseTrack
     truth: PoseTrack
+    picture: str = SQUARE
+
+
+def picture_size(config: DemoConfig, picture: str) -> tuple[int, int]:
+    """(width, height) of a case's picture."""
+    side = config.render_size
+    return (TRAVEL_WIDTH * side, side) if picture == WIDE else (side, side)
+
+
+def references(config: DemoConfig = DEMO) -> dict[str, PoseTrack]:
+    """The demo's reference track in each picture (:data:`SQUARE`, :data:`WIDE`), standing at its centre."""
+    from clone.demo.scenes import reference_track
+
+    return {picture: reference_track(config, size=picture_size(config, picture)) for picture in (SQUARE, WIDE)}
+
+
+def travel(track: PoseTrack) -> float:
+    """How far the MidHip travels across the picture over the track, in shares of the body's height (the 90th
+    percentile of its frames' heights)."""
+    body = track.to_layout("body15")
+    root = body.joint("mid_hip")[:, 0]
+    heights = np.nanmax(body.joints[..., 1], axis=1) - np.nanmin(body.joints[..., 1], axis=1)
+    height = float(np.nanpercentile(heights, 90))
+    return float((np.nanmax(root) - np.nanmin(root)) / height) if height > 0 else 0.0
 
 
 def cloning_cases(
     clips: Sequence[Mapping], mocap: str | Path, frames: int = 100, limit: int | None = None,
-    config: DemoConfig = DEMO, fps: float = 30.0, turns: bool = False,
+    config: DemoConfig = DEMO, fps: float = 30.0, turns: bool = False, travelling: bool = False,
 ) -> list[CloningCase]:  # fmt: skip
     """The demo's pairs on every usable clip, clips in the given order, at most ``limit`` of them.
 
@@ -78,6 +117,9 @@ def cloning_cases(
         config: the demo whose reference and pairs are copied.
         fps: the world's frame rate.
         turns: add each clip's turning driver (kind :data:`TURN_KIND`; skipped where its truth leaves the frame).
+        travelling: add the travelling driver (kind :data:`TRAVEL_KIND`, picture :data:`WIDE`) of every clip
+            whose truth travels at least :data:`TRAVEL_LEAST` of its height and stays inside the wide frame (such
+            a clip counts towards ``limit`` even when its truth leaves the square frame).
 
     Raises:
         InputError: no clip long enough whose ground truth stays inside the frame.
@@ -91,7 +133,7 @@ def cloning_cases(
 
     ref_skeleton, ref_look, _ = get_character(config.reference_character)
     cases: list[CloningCase] = []
-    used = 0
+    used = square = 0  # clips giving any case; clips whose truth stays in the square frame
     for clip in clips:
         if limit is not None and used >= limit:
             break
@@ -99,49 +141,71 @@ def cloning_cases(
             continue
         motion = load_motion(Path(mocap) / clip["path"], fps=fps)
         window = {"size": config.render_size, "start": CASE_START, "frames": frames}
+        found = len(cases)
         truth = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, **window)[1]
-        if not stays_in_frame(config, truth):
-            continue
-        used += 1
-        for pair in config.pairs:
-            skeleton, look, _ = get_character(pair.character)
-            driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
-            cases.append(CloningCase(clip["path"], pair.name, driver_track(driver, name=clip["path"]),
-                                     truth.to_layout("body15")))  # fmt: skip
-        if turns:
-            turn = draw_turn(np.random.default_rng([TURN_SEED, used]), frames)
-            turned = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, turn=turn, **window)[1]
-            if stays_in_frame(config, turned):
-                skeleton, look, _ = get_character(TURN_CHARACTER)
-                driver = render_performance(motion, skeleton, look, yaw=TURN_YAW, turn=turn, **window)[1]
-                cases.append(CloningCase(clip["path"], TURN_KIND, driver_track(driver, name=clip["path"]),
-                                         turned.to_layout("body15")))  # fmt: skip
+        if stays_in_frame(config, truth):
+            square += 1
+            for pair in config.pairs:
+                skeleton, look, _ = get_character(pair.character)
+                driver = render_performance(motion, skeleton, look, yaw=pair.yaw, **window)[1]
+                cases.append(CloningCase(clip["path"], pair.name, driver_track(driver, name=clip["path"]),
+                                         truth.to_layout("body15")))  # fmt: skip
+            if turns:
+                turn = draw_turn(np.random.default_rng([TURN_SEED, square]), frames)
+                turned = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, turn=turn,
+                                            **window)[1]  # fmt: skip
+                if stays_in_frame(config, turned):
+                    skeleton, look, _ = get_character(TURN_CHARACTER)
+                    driver = render_performance(motion, skeleton, look, yaw=TURN_YAW, turn=turn, **window)[1]
+                    cases.append(CloningCase(clip["path"], TURN_KIND, driver_track(driver, name=clip["path"]),
+                                             turned.to_layout("body15")))  # fmt: skip
+        if travelling:
+            travelled = sum(c.kind == TRAVEL_KIND for c in cases)
+            turn = (draw_turn(np.random.default_rng([TRAVEL_SEED, travelled]), frames) if travelled % 2 else None)
+            wide = {**window, "size": picture_size(config, WIDE)}
+            walked = render_performance(motion, ref_skeleton, ref_look, yaw=config.reference_yaw, turn=turn,
+                                        **wide)[1]  # fmt: skip
+            if travel(walked) >= TRAVEL_LEAST and stays_in_frame(config, walked):
+                skeleton, look, _ = get_character(TRAVEL_CHARACTER)
+                driver = render_performance(motion, skeleton, look, yaw=TRAVEL_YAW, turn=turn, **wide)[1]
+                cases.append(CloningCase(clip["path"], TRAVEL_KIND, driver_track(driver, name=clip["path"]),
+                                         walked.to_layout("body15"), WIDE))  # fmt: skip
+        used += len(cases) > found
     if not cases:
         raise InputError(f"no clip of at least {CASE_START + frames} frames whose ground truth stays inside the frame")
     log.info("%d cloning cases from %d clips", len(cases), used)
     return cases
 
 
-def network_drive(weights: str | Path | None, reference: PoseTrack, device: str = "cpu") -> Drive:
-    """`clone drive --method retarget` onto ``reference`` with ``weights`` (None: the shipped ones)."""
+def network_drive(weights: str | Path | None, references: Mapping[str, PoseTrack], device: str = "cpu") -> Drive:
+    """`clone drive --method retarget` with ``weights`` (None: the shipped ones) onto the reference of each case's
+    picture (:func:`references`)."""
     from clone.drive.poses import finish_driven
     from retarget.api import load_retargeter
 
     net = load_retargeter(weights, device=device)
-    codes = net.reference_codes(reference)
-    return lambda driver: finish_driven(net.retarget(driver, codes), driver, reference, retargeted=True)[0]
+    codes = {picture: net.reference_codes(reference) for picture, reference in references.items()}
+
+    def drive(case: CloningCase) -> PoseTrack:
+        reference = references[case.picture]
+        return finish_driven(net.retarget(case.driver, codes[case.picture]), case.driver, reference,
+                             retargeted=True)[0]  # fmt: skip
+
+    return drive
 
 
-def global_scale_drive(reference: PoseTrack) -> Drive:
-    """`clone drive --method global-scale` onto ``reference`` (Everybody Dance Now's global scaling)."""
+def global_scale_drive(references: Mapping[str, PoseTrack]) -> Drive:
+    """`clone drive --method global-scale` (Everybody Dance Now's global scaling) onto the reference of each
+    case's picture."""
     from clone.drive.poses import finish_driven, global_scale_to
     from retarget.baselines.global_scale import scale_stats
 
-    target = scale_stats(reference.joints, reference.joint_layout)
+    targets = {picture: scale_stats(r.joints, r.joint_layout) for picture, r in references.items()}
 
-    def drive(driver: PoseTrack) -> PoseTrack:
-        scaled = global_scale_to(driver, target, reference.image_size)
-        return finish_driven(scaled, driver, reference, retargeted=False)[0]
+    def drive(case: CloningCase) -> PoseTrack:
+        reference = references[case.picture]
+        scaled = global_scale_to(case.driver, targets[case.picture], reference.image_size)
+        return finish_driven(scaled, case.driver, reference, retargeted=False)[0]
 
     return drive
 
@@ -167,7 +231,7 @@ def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
     errors = {key: {name: np.empty(len(cases)) for name in methods} for key in MEASURES}
     for k, case in enumerate(cases):
         for name, drive in methods.items():
-            for key, value in case_errors(drive(case.driver), case.truth).items():
+            for key, value in case_errors(drive(case), case.truth).items():
                 errors[key][name][k] = value
         if progress is not None:
             progress(k + 1, len(cases))
@@ -177,11 +241,11 @@ def score(cases: Sequence[CloningCase], methods: Mapping[str, Drive],
 def summarise(cases: Sequence[CloningCase], errors: Mapping[str, Mapping[str, np.ndarray]], baseline: str) -> dict:
     """Per measure, row and pair kind the mean ± its standard error, and the paired difference to ``baseline``.
 
-    ``all`` is the demo's own pairs: the turning drivers (:data:`TURN_KIND`) are a kind of their own, so that
-    ``all`` reads the same with and without them."""
+    ``all`` is the demo's own pairs: the turning and travelling drivers (:data:`TURN_KIND`, :data:`TRAVEL_KIND`)
+    are kinds of their own, so that ``all`` reads the same with and without them."""
     kinds = list(dict.fromkeys(c.kind for c in cases))
     masks = {**{k: np.array([c.kind == k for c in cases]) for k in kinds},
-             "all": np.array([c.kind != TURN_KIND for c in cases])}  # fmt: skip
+             "all": np.array([c.kind not in (TURN_KIND, TRAVEL_KIND) for c in cases])}  # fmt: skip
 
     def stats(values: np.ndarray) -> dict[str, float]:
         mean, se = mean_se(values)
@@ -223,6 +287,7 @@ def markdown(doc: Mapping) -> str:
 
 
 __all__ = [
-    "CASE_START", "DEMO", "MEASURES", "CloningCase", "case_errors", "cloning_cases", "global_scale_drive", "markdown",
-    "network_drive", "score", "summarise",
+    "CASE_START", "DEMO", "MEASURES", "SQUARE", "TRAVEL_KIND", "TURN_KIND", "WIDE", "CloningCase", "case_errors",
+    "cloning_cases", "global_scale_drive", "markdown", "network_drive", "picture_size", "references", "score",
+    "summarise", "travel",
 ]

@@ -72,6 +72,8 @@ def summarise(scores: Sequence[CaseScores]) -> dict[str, dict[str, float]]:
 
 
 def mean_se(values: np.ndarray) -> tuple[float, float]:
-    """The mean of [N] values and its standard error (0 for a single value)."""
+    """The mean of [N] values and its standard error (0 for a single value; both NaN for none)."""
+    if not len(values):
+        return float("nan"), float("nan")
     se = float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
     return float(values.mean()), se

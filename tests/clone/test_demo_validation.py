@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from clone.cli.main import app
 from clone.demo import validation
 from clone.demo.config import PAIRS
-from clone.demo.scenes import edge_distance, reference_track
+from clone.demo.scenes import edge_distance
 from pose_io.errors import InputError
 from pose_io.measures import reference_limb_lengths
 from retarget.api import PACKAGED_WEIGHTS
@@ -89,7 +89,7 @@ def test_a_turning_driver_per_clip_turns_with_its_truth_and_stays_apart_from_all
     same_clip = next(c for c in cases if c.clip == turning[0].clip and c.kind == "both")  # its body and camera
     assert np.abs(turning[0].truth.joints - same_clip.truth.joints).max() > 5  # pixels: the truth turned too
 
-    errors = validation.score(turned, {"ours": lambda d: d, "other": lambda d: d})  # the driver as it is
+    errors = validation.score(turned, {"ours": lambda c: c.driver, "other": lambda c: c.driver})  # as it is
     doc = validation.summarise(turned, errors, "ours")
     pose = doc["measures"]["pose_rmse_pct"]["ours"]
     assert doc["kinds"] == [p.name for p in PAIRS] + [validation.TURN_KIND]
@@ -112,16 +112,45 @@ def test_a_turning_driver_per_clip_turns_with_its_truth_and_stays_apart_from_all
     assert side(half, 0) == side(still, 0) == side(still, FRAMES - 1) != side(half, FRAMES - 1)
 
 
+def test_a_travelling_driver_walks_across_a_wide_picture_and_keeps_its_travel(world, tiny_mocap, cases) -> None:
+    clips = world.split("val").clips  # two takes of one walk: at 64 frames both leave the square frame
+    walked = validation.cloning_cases(clips, tiny_mocap, 64, travelling=True)
+    assert [c.kind for c in walked] == [validation.TRAVEL_KIND] * 2 and len({c.clip for c in walked}) == 2
+    margin = validation.DEMO.edge_margin * validation.DEMO.render_size
+    for case in walked:
+        assert case.picture == validation.WIDE and case.driver.image_size == case.truth.image_size == (768, 256)
+        assert validation.travel(case.truth) >= validation.TRAVEL_LEAST and edge_distance(case.truth) >= margin
+    with_travel = validation.cloning_cases(clips, tiny_mocap, FRAMES, travelling=True)
+    plain = [c for c in with_travel if c.kind != validation.TRAVEL_KIND]
+    assert [(c.clip, c.kind) for c in plain] == [(c.clip, c.kind) for c in cases]  # the demo's pairs unchanged
+    assert all(a.truth.equals(b.truth) for a, b in zip(plain, cases, strict=True))
+
+    references = validation.references()
+    assert references[validation.WIDE].image_size == (768, 256)
+    height = {p: np.ptp(r.to_layout("body15").joints[0, :, 1]) for p, r in references.items()}
+    assert height[validation.WIDE] == pytest.approx(height[validation.SQUARE], rel=0.02)  # the same body, wider
+    methods = {"ours": validation.network_drive(None, references),
+               "global scaling (EDN)": validation.global_scale_drive(references)}
+    driven = methods["ours"](walked[0])
+    assert driven.image_size == (768, 256) and validation.travel(driven) > 0.5 * validation.travel(walked[0].truth)
+    errors = validation.score(walked, methods)
+    doc = validation.summarise(walked, errors, "ours")
+    placement = doc["measures"]["root_rmse_pct"]
+    assert doc["kinds"] == [validation.TRAVEL_KIND] and np.isnan(placement["ours"]["all"]["mean"])  # not the demo's
+    # The travel kept on the stage: placement no worse than global scaling's (the travel issue's goal).
+    assert placement["ours"]["travel"]["mean"] < placement["global scaling (EDN)"]["travel"]["mean"]
+
+
 def test_scores_rank_the_shipped_network_over_global_scaling_and_an_untrained_one(cases, tmp_path) -> None:
     torch.manual_seed(0)
     untrained = save_checkpoint(tmp_path / "untrained.pt", RetargetNet(variant_config("full")),
                                 NormStats(np.zeros((15, 2)), np.full((15, 2), 50.0)))  # fmt: skip
-    reference = reference_track(validation.DEMO)
+    references = validation.references()
     methods = {
-        "ours": validation.network_drive(None, reference),
-        "same": validation.network_drive(PACKAGED_WEIGHTS, reference),
-        "untrained": validation.network_drive(untrained, reference),
-        "global scaling (EDN)": validation.global_scale_drive(reference),
+        "ours": validation.network_drive(None, references),
+        "same": validation.network_drive(PACKAGED_WEIGHTS, references),
+        "untrained": validation.network_drive(untrained, references),
+        "global scaling (EDN)": validation.global_scale_drive(references),
     }
     errors = validation.score(cases, methods)
     doc = validation.summarise(cases, errors, "ours")
@@ -140,8 +169,8 @@ def test_scores_rank_the_shipped_network_over_global_scaling_and_an_untrained_on
     from clone.metrics import evaluate_track
     from pose_io.measures import reference_limb_lengths, skeleton_height
 
-    driven = methods["ours"](cases[0].driver)
-    ref15 = reference.to_layout("body15")
+    driven = methods["ours"](cases[0])
+    ref15 = references[validation.SQUARE].to_layout("body15")
     full = evaluate_track(driven, reference_limb_lengths(ref15.joints), skeleton_height(ref15.joints, "body15"),
                           cases[0].truth).summary  # fmt: skip
     assert errors["pose_rmse_pct"]["ours"][0] == pytest.approx(full["pose_rmse_pct"])
