@@ -126,6 +126,14 @@ def train(
         float, typer.Option("--turn-share", help="Share of training motions given a whole-body turn of 90-360 "
                             "degrees about the vertical, in 3D before projection (0: the captured motion only).")
     ] = 0.0,
+    splice_share: Annotated[
+        float, typer.Option("--splice-share", help="Share of training motions whose torso, arms and head come from "
+                            "another training motion, on the same body, in 3D before projection (0: none).")
+    ] = 0.0,
+    bend: Annotated[
+        float, typer.Option("--bend", help="Smooth noise of this many degrees on every training motion's "
+                            "upper-body joint angles, in 3D before projection; the legs keep theirs (0: none).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -177,6 +185,8 @@ def train(
     check_number("--perspective", perspective, 0, 1)
     check_number("--frontal-share", frontal_share, 0, 1)
     check_number("--turn-share", turn_share, 0, 1)
+    check_number("--splice-share", splice_share, 0, 1)
+    check_number("--bend", bend, 0, 45)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -190,7 +200,8 @@ def train(
         config = TrainConfig(variant=variant.value, loss=loss, seed=seed, lr=lr, batch_size=batch_size,
                              extra_characters=extra_characters, extra_spread=extra_spread,
                              cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective),
-                             frontal_share=frontal_share, turn_share=turn_share)
+                             frontal_share=frontal_share, turn_share=turn_share, splice_share=splice_share,
+                             bend_deg=bend)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

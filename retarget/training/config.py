@@ -55,6 +55,10 @@ class TrainConfig:
         turn_share: share of training motions given a whole-body turn about the vertical in 3D before
             projection (:mod:`retarget.world.turns`); validation keeps the captured motion.
         turn_range: angles of those turns, degrees, either way.
+        splice_share: share of training motions whose torso, arms and head come from another training motion
+            (:func:`retarget.world.variations.splice`); validation keeps the captured motion.
+        bend_deg: smooth noise of this many degrees on every training motion's upper-body joint angles
+            (:func:`retarget.world.variations.bend`; 0: none).
     """
 
     variant: str = "full"
@@ -79,6 +83,8 @@ class TrainConfig:
     frontal_share: float = 0.0
     turn_share: float = 0.0
     turn_range: tuple[float, float] = (90.0, 360.0)
+    splice_share: float = 0.0
+    bend_deg: float = 0.0
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -92,6 +98,10 @@ class TrainConfig:
             raise ValueError("turn_share must be a share in [0, 1]")
         if not 0 <= self.turn_range[0] <= self.turn_range[1]:
             raise ValueError("turn_range must be 0 <= low <= high degrees")
+        if not 0 <= self.splice_share <= 1:
+            raise ValueError("splice_share must be a share in [0, 1]")
+        if not 0 <= self.bend_deg <= 45:
+            raise ValueError("bend_deg must be in [0, 45] degrees")
 
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict (lists for tuples)."""

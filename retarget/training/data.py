@@ -21,6 +21,7 @@ from retarget.training.augment import COMBOS
 from retarget.training.config import TrainConfig
 from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
 from retarget.world.turns import apply_turn, draw_turn
+from retarget.world.variations import bend, draw_bend, splice
 
 log = logging.getLogger(__name__)
 
@@ -69,12 +70,17 @@ class CrossSamples(Dataset):
         turns: share of motions given a whole-body turn in 3D before projection
             (:func:`retarget.world.turns.draw_turn`); every window of a turned motion turns alike.
         turn_range: the turns' angles, degrees (either way).
+        splices: share of motions whose torso, arms and head come from another motion of the split
+            (:func:`retarget.world.variations.splice`, on the same character).
+        bend_deg: when above 0, every motion's upper-body joint angles get smooth noise of this many degrees
+            (:func:`retarget.world.variations.bend`); the legs keep theirs.
     """
 
     def __init__(
         self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None,
         cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None, frontal: float = 0.0,
-        turns: float = 0.0, turn_range: tuple[float, float] = (90.0, 360.0),
+        turns: float = 0.0, turn_range: tuple[float, float] = (90.0, 360.0), splices: float = 0.0,
+        bend_deg: float = 0.0,
     ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
@@ -101,6 +107,12 @@ class CrossSamples(Dataset):
             raise ValueError("turns must be a share in [0, 1]")
         self.turns = turns
         self.turn_range = tuple(turn_range)
+        if not 0 <= splices <= 1:
+            raise ValueError("splices must be a share in [0, 1]")
+        if bend_deg < 0:
+            raise ValueError("bend_deg must be >= 0")
+        self.splices = splices
+        self.bend_deg = bend_deg
         self.frontal_views = np.arange(split.num_views)
         if frontal > 0:
             self.frontal_views = np.flatnonzero(np.abs(np.asarray(split.views)) <= FRONTAL_YAW)
@@ -131,16 +143,23 @@ class CrossSamples(Dataset):
         turning = np.random.default_rng([self.seed, epoch, index, 15485863]) if self.turns > 0 else None
         turns = [draw_turn(turning, self.length, self.turn_range) if turning is not None
                  and turning.random() < self.turns else None for _ in range(2)]  # fmt: skip
+        donors, bends = self._variations(epoch, index, motions)
         cache: dict[tuple[int, int, int], np.ndarray] = {}
         windows = []
         for m, c, v in COMBOS:
             key = (int(motions[m]), int(chars[c]), int(views[v]))
             if key not in cache:
                 camera = np.random.default_rng(int(view_seeds[v]))
-                if turns[m] is None:
+                if turns[m] is None and donors[m] is None and bends[m] is None:
                     window = self.split.window(*key, length=self.length, offset=0, rng=camera, **self._camera_kwargs)
                 else:
-                    pos = apply_turn(self.split.window3d(key[0], key[1], self.length), turns[m])
+                    pos = self.split.window3d(key[0], key[1], self.length)
+                    if donors[m] is not None:
+                        pos = splice(pos, self.split.window3d(donors[m], key[1], self.length))
+                    if bends[m] is not None:
+                        pos = bend(pos, bends[m])
+                    if turns[m] is not None:
+                        pos = apply_turn(pos, turns[m])
                     window = self.split.project(pos[None], [key[2]], camera, cameras=self.cameras)[0]
                 if self.own_height:
                     window = window * (self.height / skeleton_heights(window[None], LAYOUT)[0])
@@ -153,6 +172,23 @@ class CrossSamples(Dataset):
 
     def __getitem__(self, index: int) -> dict[str, np.ndarray]:
         return self.sample(self.epoch, index)
+
+    def _variations(self, epoch: int, index: int, motions: np.ndarray) -> tuple[list, list]:
+        """Per motion slot of a sample: the motion its upper body comes from (or None) and its bend's rotation
+        vectors (or None). Drawn from a stream of their own, once per slot, so both characters of a motion
+        move alike; without either variation nothing is drawn."""
+        donors: list[int | None] = [None, None]
+        bends: list[np.ndarray | None] = [None, None]
+        if self.splices <= 0 and self.bend_deg <= 0:
+            return donors, bends
+        rng = np.random.default_rng([self.seed, epoch, index, 32452843])
+        for m in range(2):
+            if self.splices > 0 and rng.random() < self.splices:
+                donor = int(rng.integers(self.split.num_motions - 1))
+                donors[m] = donor + (donor >= motions[m])  # any motion but its own
+            if self.bend_deg > 0:
+                bends[m] = draw_bend(rng, self.length, self.bend_deg)
+        return donors, bends
 
 
 def _pair(rng: np.random.Generator, n: int, distinct: bool) -> np.ndarray:

@@ -138,3 +138,23 @@ def test_turning_samples_keep_their_draws_and_turn_every_window_of_a_motion_alik
         CrossSamples(tiny_split, 64, "full", 4, seed=0, turns=1.5)
     config = TrainConfig(turn_share=0.3, turn_range=(90.0, 180.0))
     assert TrainConfig.from_dict(config.to_dict()) == config
+
+
+def test_spliced_and_bent_samples_keep_their_draws_and_vary_the_motion(tiny_split):
+    plain = CrossSamples(tiny_split, 64, "full", 20, seed=3)
+    spliced = CrossSamples(tiny_split, 64, "full", 20, seed=3, splices=1.0)
+    bent = CrossSamples(tiny_split, 64, "full", 20, seed=3, bend_deg=8.0)
+    for i in range(3):
+        a, b, c = plain.sample(1, i), spliced.sample(1, i), bent.sample(1, i)
+        np.testing.assert_array_equal(a["ids"], b["ids"])
+        np.testing.assert_array_equal(a["ids"], c["ids"])
+        assert not np.allclose(a["windows"], b["windows"]) and not np.allclose(a["windows"], c["windows"])
+        np.testing.assert_array_equal(b["windows"], spliced.sample(1, i)["windows"])  # deterministic
+        np.testing.assert_array_equal(c["windows"], bent.sample(1, i)["windows"])
+        assert np.isfinite(b["windows"]).all() and np.isfinite(c["windows"]).all()
+    with pytest.raises(ValueError, match="share"):
+        CrossSamples(tiny_split, 64, "full", 4, seed=0, splices=2.0)
+    with pytest.raises(ValueError, match="bend"):
+        TrainConfig(bend_deg=90.0)
+    config = TrainConfig(splice_share=0.3, bend_deg=8.0)
+    assert TrainConfig.from_dict(config.to_dict()) == config
