@@ -55,6 +55,51 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     return out
 
 
+# A person crop's margin beyond the pose maps' extent, as a share of the drawn body's height (hair, dress and
+# hands reach past the skeleton), and never under this many pixels.
+CROP_MARGIN = 0.15
+CROP_MARGIN_PX = 2
+
+
+def person_window(drawn: Tensor, multiple: int, generator: torch.Generator) -> tuple[int, int, int, int] | None:
+    """A random window ``(x0, y0, width, height)`` of an [S, S] bool map of where the person is drawn that holds
+    all of it and a margin (:data:`CROP_MARGIN`), each side a multiple of ``multiple`` and at least half the
+    canvas; None when nothing is drawn. Two numbers are drawn from ``generator`` either way."""
+    size = drawn.shape[-1]
+    u = torch.rand(2, generator=generator).tolist()
+    rows, cols = torch.nonzero(drawn.any(dim=1)), torch.nonzero(drawn.any(dim=0))
+    if len(rows) == 0:
+        return None
+    y_lo, y_hi = int(rows[0]), int(rows[-1]) + 1
+    x_lo, x_hi = int(cols[0]), int(cols[-1]) + 1
+    margin = max(CROP_MARGIN_PX, CROP_MARGIN * (y_hi - y_lo))
+    start = []
+    extent = []
+    for (lo, hi), draw in zip(((x_lo - margin, x_hi + margin), (y_lo - margin, y_hi + margin)), u):
+        lo, hi = max(0.0, lo), min(float(size), hi)
+        side = min(size, max(size // 2, multiple * -(-round(hi - lo) // multiple)))
+        first, last = max(0.0, hi - side), min(float(size - side), lo)  # starts that keep [lo, hi] inside
+        if first > last:
+            first = last = min(max(0.0, (lo + hi - side) / 2), float(size - side))
+        start.append(round(first + draw * (last - first)))
+        extent.append(side)
+    return start[0], start[1], extent[0], extent[1]
+
+
+def crop_to_person(sample: dict[str, Tensor], multiple: int, generator: torch.Generator) -> dict[str, Tensor]:
+    """Every [B, C, S, S] tensor of ``sample`` cut to one :func:`person_window` around the person drawn in any of
+    the batch's pose maps (and face discs); the sample as it is when none is drawn."""
+    poses = torch.cat([sample["pose_prev"], sample["pose_cur"]], dim=1) > -0.95  # [B, 6, S, S]
+    drawn = poses.any(dim=(0, 1))
+    if "face" in sample:
+        drawn = drawn | (sample["face"] > 0).any(dim=(0, 1))
+    window = person_window(drawn, multiple, generator)
+    if window is None:
+        return sample
+    x0, y0, w, h = window
+    return {k: v[..., y0:y0 + h, x0:x0 + w] if v.dim() == 4 else v for k, v in sample.items()}
+
+
 def degrade_previous(
     prev: Tensor, has_prev: Tensor, cfg: AugmentConfig, dropout: float, generator: torch.Generator
 ) -> Tensor:

@@ -27,6 +27,9 @@ class AugmentConfig:
         mirror: share of the samples flipped left-right (frames, plate and pose maps, left and right joints
             swapped): a reference who turns one way is also seen turning the other, her left arm's poses also on
             her right. Only for outfits and backgrounds that look alike mirrored (no writing, no one-sided cut).
+        person_crop: train on a window of the canvas around the person (her pose maps' extent and a margin,
+            each side a multiple of the generator's stride, at least half the canvas) instead of the whole
+            canvas: the steps skip background the plate already gives. Driving is unchanged.
     """
 
     rotation_deg: float = 3.0
@@ -36,6 +39,7 @@ class AugmentConfig:
     prev_noise: float = 0.03
     pose_jitter: float = 0.0
     mirror: float = 0.0
+    person_crop: bool = False
 
 
 @dataclass(frozen=True)

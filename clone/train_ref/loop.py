@@ -27,7 +27,7 @@ import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
-from clone.train_ref.augment import random_affines, warp_batch
+from clone.train_ref.augment import crop_to_person, random_affines, warp_batch
 from clone.train_ref.checkpoint import ReferenceInfo, load_init
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import (
@@ -311,6 +311,9 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     if config.augment.mirror:  # drawn only when asked, so runs without it draw as before
         mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()[part]
     sample = warp_batch(data.batch(data.indices[pick[part]], offsets, mirror), matrices[part])
+    if config.augment.person_crop:  # drawn only when asked, so runs without it draw as before
+        # each process cuts its own part; every one draws the same two numbers, so the generators stay in step
+        sample = crop_to_person(sample, 2 ** trainer.g.config.depth, rng)
     pin = trainer.device.type == "cuda"
     sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
     prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)

@@ -46,3 +46,41 @@ def test_the_plate_is_warped_with_the_frames():
     out = warp_batch(sample, random_affines(2, 32, AugmentConfig(rotation_deg=10, translate=0.1), gen))
     assert not torch.allclose(out["plate"], frame)
     torch.testing.assert_close(out["plate"], out["frame_cur"])  # still the background of the warped frame
+
+
+def test_a_person_window_holds_the_person_and_a_margin_in_steps_of_the_stride():
+    from clone.train_ref.augment import CROP_MARGIN, person_window
+
+    drawn = torch.zeros(256, 256, dtype=torch.bool)
+    drawn[20:240, 100:140] = True  # a tall, narrow body
+    gen = torch.Generator().manual_seed(0)
+    margin = CROP_MARGIN * 220
+    starts = set()
+    for _ in range(20):
+        x0, y0, w, h = person_window(drawn, 64, gen)
+        assert (w, h) == (128, 256)  # at least half the canvas; the full height the body needs
+        assert x0 <= 100 - margin and x0 + w >= 140 + margin and 0 <= x0 <= 256 - w
+        starts.add(x0)
+    assert len(starts) > 3  # the window moves about the person
+    wide = torch.zeros(256, 256, dtype=torch.bool)
+    wide[100:160, 10:200] = True
+    x0, y0, w, h = person_window(wide, 64, gen)
+    assert w == 256 and h == 128 and y0 <= 100 - 9 and y0 + h >= 160 + 9  # 15 % of the body's 60 rows
+    assert person_window(torch.zeros(64, 64, dtype=torch.bool), 16, gen) is None
+
+
+def test_crop_to_person_cuts_every_map_alike():
+    from clone.train_ref.augment import crop_to_person
+
+    pose = -torch.ones(1, 3, 64, 64)
+    pose[..., 10:50, 28:36] = 1.0
+    frame = torch.rand(1, 3, 64, 64)
+    sample = {"pose_prev": pose, "pose_cur": pose.clone(), "frame_prev": frame, "frame_cur": frame.clone(),
+              "plate": frame.clone(), "face": torch.zeros(1, 1, 64, 64), "has_prev": torch.tensor([True])}
+    out = crop_to_person(sample, 16, torch.Generator().manual_seed(1))
+    assert out["pose_cur"].shape == (1, 3, 64, 32) and out["face"].shape == (1, 1, 64, 32)
+    assert torch.equal(out["has_prev"], sample["has_prev"])
+    assert (out["pose_cur"] > 0).sum() == (pose > 0).sum()  # the whole body is inside
+    torch.testing.assert_close(out["frame_cur"], out["plate"])  # one window for every map
+    empty = dict(sample, pose_prev=-torch.ones(1, 3, 64, 64), pose_cur=-torch.ones(1, 3, 64, 64))
+    assert crop_to_person(empty, 16, torch.Generator())["frame_cur"].shape == (1, 3, 64, 64)

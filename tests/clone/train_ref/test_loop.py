@@ -163,3 +163,28 @@ def test_face_gan_is_stored_and_refused_where_it_cannot_work(reference, tmp_path
     assert "--face-gan" in line and "--no-details" in line
     line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--face-gan", "1", "--resume")))
     assert "--face-gan" in line
+
+
+def test_person_crops_train_on_a_window_and_the_model_drives_the_whole_canvas(reference, tmp_path, monkeypatch):
+    import dataclasses
+
+    from clone.train_ref import AugmentConfig, trainer
+
+    poses, frames = reference
+    widths = []
+    step = trainer.Trainer.train_step
+
+    def spy(self, sample, *args, **kwargs):
+        widths.append(tuple(sample["frame_cur"].shape[-2:]))
+        return step(self, sample, *args, **kwargs)
+
+    monkeypatch.setattr(trainer.Trainer, "train_step", spy)
+    config = TrainConfig(size=32, seed=0, canvas_mode="full")  # the letterboxed frame: room beside the performer
+    out = tmp_path / "crop.pt"
+    train_reference(poses, frames, out, steps=3, device="cpu",
+                    config=dataclasses.replace(config, augment=AugmentConfig(person_crop=True)))
+    assert len(widths) == 3 and all(h % 8 == 0 and w % 8 == 0 and min(h, w) >= 16 for h, w in widths)
+    assert any(hw != (32, 32) for hw in widths)  # the performer does not fill the canvas
+    model = load_reference_model(out)
+    assert model.canvas.size == 32
+    assert model.build_generator()(torch.zeros(1, 6, 32, 32), model.plate_tensor()).shape == (1, 3, 32, 32)
