@@ -7,6 +7,7 @@ a run (and a resumed run) draws the same numbers on every device.
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 from torch import Tensor
 
@@ -59,25 +60,28 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
 # hands reach past the skeleton), and never under this many pixels.
 CROP_MARGIN = 0.15
 CROP_MARGIN_PX = 2
+# The shortest side of a person crop (and at least half the canvas): the discriminator's five layers need 64.
+MIN_CROP = 64
 
 
-def person_window(drawn: Tensor, multiple: int, generator: torch.Generator) -> tuple[int, int, int, int] | None:
-    """A random window ``(x0, y0, width, height)`` of an [S, S] bool map of where the person is drawn that holds
-    all of it and a margin (:data:`CROP_MARGIN`), each side a multiple of ``multiple`` and at least half the
-    canvas; None when nothing is drawn. Two numbers are drawn from ``generator`` either way."""
-    size = drawn.shape[-1]
+def person_window(points: np.ndarray, size: int, multiple: int, generator: torch.Generator
+                  ) -> tuple[int, int, int, int] | None:  # fmt: skip
+    """A random window ``(x0, y0, width, height)`` of an ``size``² canvas that holds every finite point of
+    ``points`` [N, 2] (canvas pixels, NaN where missing) and a margin (:data:`CROP_MARGIN` of their height),
+    each side a multiple of ``multiple``, at least half the canvas and :data:`MIN_CROP`; None without a finite point. Two numbers
+    are drawn from ``generator`` either way, so that every process of a run stays in step."""
     u = torch.rand(2, generator=generator).tolist()
-    rows, cols = torch.nonzero(drawn.any(dim=1)), torch.nonzero(drawn.any(dim=0))
-    if len(rows) == 0:
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if len(pts) == 0:
         return None
-    y_lo, y_hi = int(rows[0]), int(rows[-1]) + 1
-    x_lo, x_hi = int(cols[0]), int(cols[-1]) + 1
+    (x_lo, y_lo), (x_hi, y_hi) = pts.min(axis=0), pts.max(axis=0) + 1.0
     margin = max(CROP_MARGIN_PX, CROP_MARGIN * (y_hi - y_lo))
     start = []
     extent = []
     for (lo, hi), draw in zip(((x_lo - margin, x_hi + margin), (y_lo - margin, y_hi + margin)), u):
         lo, hi = max(0.0, lo), min(float(size), hi)
-        side = min(size, max(size // 2, multiple * -(-round(hi - lo) // multiple)))
+        side = min(size, max(size // 2, MIN_CROP, multiple * -(-round(max(hi - lo, 0.0)) // multiple)))
         first, last = max(0.0, hi - side), min(float(size - side), lo)  # starts that keep [lo, hi] inside
         if first > last:
             first = last = min(max(0.0, (lo + hi - side) / 2), float(size - side))
@@ -86,14 +90,14 @@ def person_window(drawn: Tensor, multiple: int, generator: torch.Generator) -> t
     return start[0], start[1], extent[0], extent[1]
 
 
-def crop_to_person(sample: dict[str, Tensor], multiple: int, generator: torch.Generator) -> dict[str, Tensor]:
-    """Every [B, C, S, S] tensor of ``sample`` cut to one :func:`person_window` around the person drawn in any of
-    the batch's pose maps (and face discs); the sample as it is when none is drawn."""
-    poses = torch.cat([sample["pose_prev"], sample["pose_cur"]], dim=1) > -0.95  # [B, 6, S, S]
-    drawn = poses.any(dim=(0, 1))
-    if "face" in sample:
-        drawn = drawn | (sample["face"] > 0).any(dim=(0, 1))
-    window = person_window(drawn, multiple, generator)
+def warped_points(points: np.ndarray, matrices: Tensor) -> np.ndarray:
+    """[B, N, 2] canvas points moved by the [B, 2, 3] warps of :func:`warp_batch` (NaN stays NaN)."""
+    m = matrices.detach().cpu().numpy().astype(np.float64)  # [B, 2, 3]
+    return np.einsum("bij,bnj->bni", m[:, :, :2], points) + m[:, None, :, 2]
+
+
+def crop(sample: dict[str, Tensor], window: tuple[int, int, int, int] | None) -> dict[str, Tensor]:
+    """Every [B, C, S, S] tensor of ``sample`` cut to ``window`` ``(x0, y0, width, height)`` (None: as it is)."""
     if window is None:
         return sample
     x0, y0, w, h = window

@@ -27,7 +27,7 @@ import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
-from clone.train_ref.augment import crop_to_person, random_affines, warp_batch
+from clone.train_ref.augment import crop, person_window, random_affines, warp_batch, warped_points
 from clone.train_ref.checkpoint import ReferenceInfo, load_init
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import (
@@ -309,11 +309,16 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
         offsets = (noise * config.augment.pose_jitter * data.height)[part]
     mirror = None
     if config.augment.mirror:  # drawn only when asked, so runs without it draw as before
-        mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()[part]
-    sample = warp_batch(data.batch(data.indices[pick[part]], offsets, mirror), matrices[part])
+        mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()
+    idx = data.indices[pick]
+    sample = warp_batch(data.batch(idx[part], offsets, None if mirror is None else mirror[part]), matrices[part])
     if config.augment.person_crop:  # drawn only when asked, so runs without it draw as before
-        # each process cuts its own part; every one draws the same two numbers, so the generators stay in step
-        sample = crop_to_person(sample, 2 ** trainer.g.config.depth, rng)
+        # one window around the whole batch's people (both frames of each sample), the same on every process
+        flips = np.zeros(total, bool) if mirror is None else mirror
+        points = np.stack([np.concatenate([data.frame_joints(i, f), data.frame_joints(max(i - 1, 0), f)])
+                           for i, f in zip(idx, flips)])  # [total, 2J, 2]
+        window = person_window(warped_points(points, matrices), data.size, 2 ** trainer.g.config.depth, rng)
+        sample = crop(sample, window)
     pin = trainer.device.type == "cuda"
     sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
     prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)

@@ -51,36 +51,38 @@ def test_the_plate_is_warped_with_the_frames():
 def test_a_person_window_holds_the_person_and_a_margin_in_steps_of_the_stride():
     from clone.train_ref.augment import CROP_MARGIN, person_window
 
-    drawn = torch.zeros(256, 256, dtype=torch.bool)
-    drawn[20:240, 100:140] = True  # a tall, narrow body
+    body = np.array([[100.0, 20.0], [139.0, 239.0], [np.nan, np.nan]])  # a tall, narrow body; a missing joint
     gen = torch.Generator().manual_seed(0)
     margin = CROP_MARGIN * 220
     starts = set()
     for _ in range(20):
-        x0, y0, w, h = person_window(drawn, 64, gen)
+        x0, y0, w, h = person_window(body, 256, 64, gen)
         assert (w, h) == (128, 256)  # at least half the canvas; the full height the body needs
         assert x0 <= 100 - margin and x0 + w >= 140 + margin and 0 <= x0 <= 256 - w
         starts.add(x0)
     assert len(starts) > 3  # the window moves about the person
-    wide = torch.zeros(256, 256, dtype=torch.bool)
-    wide[100:160, 10:200] = True
-    x0, y0, w, h = person_window(wide, 64, gen)
+    wide = np.array([[10.0, 100.0], [199.0, 159.0]])
+    x0, y0, w, h = person_window(wide, 256, 64, gen)
     assert w == 256 and h == 128 and y0 <= 100 - 9 and y0 + h >= 160 + 9  # 15 % of the body's 60 rows
-    assert person_window(torch.zeros(64, 64, dtype=torch.bool), 16, gen) is None
+    assert person_window(np.full((3, 2), np.nan), 64, 16, gen) is None
+    assert person_window(body / 4, 64, 8, gen)[2:] == (64, 64)  # never under 64 pixels: the whole small canvas
 
 
-def test_crop_to_person_cuts_every_map_alike():
-    from clone.train_ref.augment import crop_to_person
+def test_a_crop_cuts_every_map_alike_around_the_warped_joints():
+    from clone.train_ref.augment import crop, person_window, warped_points
 
-    pose = -torch.ones(1, 3, 64, 64)
-    pose[..., 10:50, 28:36] = 1.0
-    frame = torch.rand(1, 3, 64, 64)
+    pose = -torch.ones(1, 3, 128, 128)
+    pose[..., 10:50, 28:36] = 1.0  # the body drawn where its joints are, after the warp
+    frame = torch.rand(1, 3, 128, 128)
     sample = {"pose_prev": pose, "pose_cur": pose.clone(), "frame_prev": frame, "frame_cur": frame.clone(),
-              "plate": frame.clone(), "face": torch.zeros(1, 1, 64, 64), "has_prev": torch.tensor([True])}
-    out = crop_to_person(sample, 16, torch.Generator().manual_seed(1))
-    assert out["pose_cur"].shape == (1, 3, 64, 32) and out["face"].shape == (1, 1, 64, 32)
+              "plate": frame.clone(), "face": torch.zeros(1, 1, 128, 128), "has_prev": torch.tensor([True])}
+    shift = torch.tensor([[[1.0, 0.0, 6.0], [0.0, 1.0, -2.0]]])  # the warp moves joints 6 right, 2 up
+    joints = np.array([[[22.0, 12.0], [29.0, 51.0]]])
+    np.testing.assert_allclose(warped_points(joints, shift), [[[28.0, 10.0], [35.0, 49.0]]])
+    window = person_window(warped_points(joints, shift)[0], 128, 16, torch.Generator().manual_seed(1))
+    out = crop(sample, window)
+    assert out["pose_cur"].shape == (1, 3, 64, 64) and out["face"].shape == (1, 1, 64, 64)
     assert torch.equal(out["has_prev"], sample["has_prev"])
     assert (out["pose_cur"] > 0).sum() == (pose > 0).sum()  # the whole body is inside
     torch.testing.assert_close(out["frame_cur"], out["plate"])  # one window for every map
-    empty = dict(sample, pose_prev=-torch.ones(1, 3, 64, 64), pose_cur=-torch.ones(1, 3, 64, 64))
-    assert crop_to_person(empty, 16, torch.Generator())["frame_cur"].shape == (1, 3, 64, 64)
+    assert crop(sample, None)["frame_cur"].shape == (1, 3, 128, 128)

@@ -179,12 +179,13 @@ def test_person_crops_train_on_a_window_and_the_model_drives_the_whole_canvas(re
         return step(self, sample, *args, **kwargs)
 
     monkeypatch.setattr(trainer.Trainer, "train_step", spy)
-    config = TrainConfig(size=32, seed=0, canvas_mode="full")  # the letterboxed frame: room beside the performer
+    # the letterboxed frame at 128² (crops are at least 64 pixels): room beside the performer
+    config = TrainConfig(size=128, seed=0, canvas_mode="full", face_pass=False)
     out = tmp_path / "crop.pt"
     train_reference(poses, frames, out, steps=3, device="cpu",
                     config=dataclasses.replace(config, augment=AugmentConfig(person_crop=True)))
-    assert len(widths) == 3 and all(h % 8 == 0 and w % 8 == 0 and min(h, w) >= 16 for h, w in widths)
-    assert any(hw != (32, 32) for hw in widths)  # the performer does not fill the canvas
+    assert len(widths) == 3 and all(h % 32 == 0 and w % 32 == 0 and min(h, w) >= 64 for h, w in widths)
+    assert any(hw != (128, 128) for hw in widths)  # the performer does not fill the canvas
     model = load_reference_model(out)
-    assert model.canvas.size == 32
-    assert model.build_generator()(torch.zeros(1, 6, 32, 32), model.plate_tensor()).shape == (1, 3, 32, 32)
+    assert model.canvas.size == 128
+    assert model.build_generator()(torch.zeros(1, 6, 128, 128), model.plate_tensor()).shape == (1, 3, 128, 128)
