@@ -148,8 +148,19 @@ def budgets(quick: bool, minutes: float | str | None) -> list[float]:
     return values
 
 
-def run(quick: bool = False, minutes: float | str | None = None, strips: Path | None = None, **_: object
-        ) -> dict[str, Any]:
+def chosen_starts(starts: str | None) -> list[str]:
+    """The starts to train from: ``starts`` (comma-separated names of :data:`STARTS`), else all of them."""
+    if starts is None:
+        return list(STARTS)
+    names = [s.strip() for s in starts.split(",") if s.strip()]
+    unknown = sorted(set(names) - set(STARTS))
+    if not names or unknown:
+        raise ValueError(f"starts {starts!r}: choose from {', '.join(STARTS)}")
+    return list(dict.fromkeys(names))
+
+
+def run(quick: bool = False, minutes: float | str | None = None, strips: Path | None = None,
+        starts: str | None = None, **_: object) -> dict[str, Any]:
     import torch
 
     from bench.harness import row
@@ -163,7 +174,7 @@ def run(quick: bool = False, minutes: float | str | None = None, strips: Path | 
         return {"skipped": f"no reference videos in {SHARED_REAL}"}
     config = TrainConfig(size=SIZE, seed=0)
     prior = matching_prior(config)
-    starts = [s for s in STARTS if s != "prior" or prior is not None]
+    starts = [s for s in chosen_starts(starts) if s != "prior" or prior is not None]
     torch.set_num_threads(2)
     if strips is not None:
         Path(strips).mkdir(parents=True, exist_ok=True)

@@ -5,6 +5,7 @@
     python -m bench.run --quick              # smaller tracks, fewer repeats
     python -m bench.run --only train_quality # opt-in: SSIM after 1, 3, 10 minutes of training
     python -m bench.run --only real --minutes 1,10 --strips /tmp/strips  # opt-in: real people, these budgets
+    python -m bench.run --only real --minutes 3 --starts prior            # only the default start
 
 Writes ``results.json`` and ``results.md`` into ``--out`` (default: this folder). Each row carries the
 1/5/15-minute load average when it was measured: the machine is shared, so absolute figures move with
@@ -165,6 +166,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=HERE, help="folder for results.json / results.md")
     parser.add_argument("--repeats", type=int, default=None, help="override repeats where a stage supports it")
     parser.add_argument("--minutes", help="training budgets of the `real` stage, e.g. 1,3,10 (default 3)")
+    parser.add_argument("--starts", help="`real` stage: comma-separated starts, prior and/or none (default both)")
     parser.add_argument("--strips", type=Path, default=None,
                         help="`real` stage: write real | generated strips of held-out frames into this folder")
     args = parser.parse_args(argv)
@@ -181,7 +183,8 @@ def main(argv: list[str] | None = None) -> int:
     done: dict[str, Any] = {}
     for name in names:
         log.info("stage %s (load average %s)", name, load_average())
-        done[name] = run_stage(name, args.quick, args.repeats, minutes=args.minutes, strips=args.strips)
+        done[name] = run_stage(name, args.quick, args.repeats, minutes=args.minutes, strips=args.strips,
+                               starts=args.starts)
         path = write_results(args.out, {name: done[name]}, machine, load_start)  # partial results survive
         log.info("stage %s: %s s%s", name, done[name]["seconds"], " FAILED" if done[name].get("error") else "")
     print((args.out / "results.md").read_text())

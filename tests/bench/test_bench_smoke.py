@@ -160,6 +160,16 @@ def test_real_stage_budgets():
             budgets(False, bad)
 
 
+def test_real_stage_starts():
+    from bench.real import chosen_starts
+
+    assert chosen_starts(None) == ["prior", "none"] and chosen_starts("prior") == ["prior"]
+    assert chosen_starts("none, prior,none") == ["none", "prior"]
+    for bad in ("", "random", "prior,x"):
+        with pytest.raises(ValueError, match="starts"):
+            chosen_starts(bad)
+
+
 def test_stage_options_reach_the_stage(fake_stage):
     seen = {}
 
@@ -168,5 +178,6 @@ def test_stage_options_reach_the_stage(fake_stage):
         return {"rows": []}
 
     fake_stage.run = stage
-    bench_run.run_stage("fake", quick=True, repeats=None, minutes="1,10", strips=None)
+    bench_run.run_stage("fake", quick=True, repeats=None, minutes="1,10", strips=None, starts="prior")
     assert seen["minutes"] == "1,10" and "strips" not in seen and seen["quick"] is True
+    assert seen["starts"] == "prior"
