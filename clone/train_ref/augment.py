@@ -60,6 +60,9 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
 # hands reach past the skeleton), and never under this many pixels.
 CROP_MARGIN = 0.15
 CROP_MARGIN_PX = 2
+# The share of steps that still see the whole canvas: parts of it no window reaches (the letterbox's bars, the
+# room's far side) are left to the plate only if the generator sees them; without, it painted smears there.
+WHOLE_CANVAS_SHARE = 0.2
 # The shortest side of a person crop (and at least half the canvas): the discriminator's five layers need 64.
 MIN_CROP = 64
 

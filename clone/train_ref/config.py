@@ -27,9 +27,10 @@ class AugmentConfig:
         mirror: share of the samples flipped left-right (frames, plate and pose maps, left and right joints
             swapped): a reference who turns one way is also seen turning the other, her left arm's poses also on
             her right. Only for outfits and backgrounds that look alike mirrored (no writing, no one-sided cut).
-        person_crop: train on a window of the canvas around the person (her pose maps' extent and a margin,
+        person_crop: train on a window of the canvas around the person (her joints' extent and a margin,
             each side a multiple of the generator's stride, at least half the canvas) instead of the whole
-            canvas: the steps skip background the plate already gives (1.3-1.6x the steps on the two fashion
+            canvas, but for one step in five (``augment.WHOLE_CANVAS_SHARE``): the steps skip background the plate
+            already gives (1.3-1.6x the steps on the two fashion
             videos of ``../shared/real``). Driving is unchanged.
     """
 

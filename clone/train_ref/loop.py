@@ -27,7 +27,14 @@ import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
-from clone.train_ref.augment import crop, person_window, random_affines, warp_batch, warped_points
+from clone.train_ref.augment import (
+    WHOLE_CANVAS_SHARE,
+    crop,
+    person_window,
+    random_affines,
+    warp_batch,
+    warped_points,
+)
 from clone.train_ref.checkpoint import ReferenceInfo, load_init
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.data import (
@@ -318,7 +325,8 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
         points = np.stack([np.concatenate([data.frame_joints(i, f), data.frame_joints(max(i - 1, 0), f)])
                            for i, f in zip(idx, flips)])  # [total, 2J, 2]
         window = person_window(warped_points(points, matrices), data.size, 2 ** trainer.g.config.depth, rng)
-        sample = crop(sample, window)
+        if float(torch.rand(1, generator=rng)) >= WHOLE_CANVAS_SHARE:
+            sample = crop(sample, window)
     pin = trainer.device.type == "cuda"
     sample = {k: (v.pin_memory() if pin else v).to(trainer.device, non_blocking=pin) for k, v in sample.items()}
     prev_input, fake_prev = trainer.previous_input(sample, rng, part, total)
