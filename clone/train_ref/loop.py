@@ -140,6 +140,8 @@ def train_reference(
     if init is not None and resume:
         raise InputError("--init starts a new model; --resume continues one: pass only one of them")
     start = load_init(init, config) if init is not None else None
+    if start is not None and config.init_lr is not None:  # stored with the model, so a resumed run keeps it
+        config = replace(config, lr=config.init_lr)
     world = distributed.current()
     try:
         part = distributed.shard(config.batch_size, world)

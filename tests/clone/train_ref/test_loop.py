@@ -189,3 +189,15 @@ def test_person_crops_train_on_a_window_and_the_model_drives_the_whole_canvas(re
     model = load_reference_model(out)
     assert model.canvas.size == 128
     assert model.build_generator()(torch.zeros(1, 6, 128, 128), model.plate_tensor()).shape == (1, 3, 128, 128)
+
+
+def test_a_run_started_from_another_model_takes_the_init_learning_rate(reference, tmp_path):
+    poses, frames = reference
+    first, started, kept = tmp_path / "first.pt", tmp_path / "init.pt", tmp_path / "kept.pt"
+    config = TrainConfig(size=32, seed=0)
+    train_reference(poses, frames, first, config=config, steps=1, device="cpu")
+    train_reference(poses, frames, started, config=config, steps=1, device="cpu", init=first)
+    train_reference(poses, frames, kept, config=TrainConfig(size=32, seed=0, init_lr=None), steps=1, device="cpu",
+                    init=first)
+    lr = {p.name: load_reference_model(p).training["config"]["lr"] for p in (first, started, kept)}
+    assert lr == {"first.pt": config.lr, "init.pt": config.init_lr, "kept.pt": config.lr} and config.init_lr > config.lr
