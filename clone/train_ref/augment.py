@@ -56,8 +56,8 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     return out
 
 
-# A person crop's margin beyond the pose maps' extent, as a share of the drawn body's height (hair, dress and
-# hands reach past the skeleton), and never under this many pixels.
+# A person crop's margin beyond the joints' extent, as a share of their height (hair, dress and hands reach past
+# the skeleton), and never under this many pixels.
 CROP_MARGIN = 0.15
 CROP_MARGIN_PX = 2
 # The share of steps that still see the whole canvas: parts of it no window reaches (the letterbox's bars, the
@@ -71,8 +71,8 @@ def person_window(points: np.ndarray, size: int, multiple: int, generator: torch
                   ) -> tuple[int, int, int, int] | None:  # fmt: skip
     """A random window ``(x0, y0, width, height)`` of an ``size``² canvas that holds every finite point of
     ``points`` [N, 2] (canvas pixels, NaN where missing) and a margin (:data:`CROP_MARGIN` of their height),
-    each side a multiple of ``multiple``, at least half the canvas and :data:`MIN_CROP`; None without a finite point. Two numbers
-    are drawn from ``generator`` either way, so that every process of a run stays in step."""
+    each side a multiple of ``multiple``, at least half the canvas and :data:`MIN_CROP`; None without a finite
+    point. Two numbers are drawn from ``generator`` either way, so that every process of a run stays in step."""
     u = torch.rand(2, generator=generator).tolist()
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     pts = pts[np.isfinite(pts).all(axis=1)]

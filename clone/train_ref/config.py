@@ -219,8 +219,7 @@ class TrainConfig:
             ValueError: ``data`` names an unknown ``prev_source``.
         """
         data = dict(data)
-        # Runs stored before person crops trained on the whole canvas.
-        augment = AugmentConfig(**{"person_crop": False, **data.pop("augment")})
+        augment = AugmentConfig(**data.pop("augment"))
         loss = LossConfig(**data.pop("loss"))
         plate = PlateConfig(**data.pop("plate", {}))
         # Runs stored before the background plate trained without one.
