@@ -240,8 +240,11 @@ def train_prior(
 
     out = Path(out)
     check_options(resume, overwrite, steps, minutes)
-    previous, config = previous_and_config(out, config if resume else config or TrainConfig(size=256), resume,
-                                           overwrite)
+    if not resume:
+        # a prior continued from --init is a long run, not a minutes-long fine-tune: it keeps the prior's own
+        # learning rate (TrainConfig.init_lr was chosen for references started from the prior)
+        config = replace(config or TrainConfig(size=256), init_lr=None)
+    previous, config = previous_and_config(out, config, resume, overwrite)
     if previous is not None:
         stored = ((previous.training or {}).get("prior") or {})
         prior = PriorConfig.stored(stored) if stored else (prior or PriorConfig())

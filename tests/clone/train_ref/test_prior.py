@@ -85,6 +85,7 @@ def test_prior_run_resumes_on_its_performers_and_exports_a_compact_prior(mocap: 
     again = tmp_path / "again.pt"
     train_prior(mocap, again, config=TrainConfig(size=64, seed=3), prior=SMALL, steps=1, init=small)
     moved = load_reference_model(again).build_generator().state_dict()
+    assert load_reference_model(again).training["config"]["lr"] == TrainConfig().lr  # the prior's, not init_lr
     scratch = tmp_path / "scratch.pt"
     train_prior(mocap, scratch, config=TrainConfig(size=64, seed=3), prior=SMALL, steps=1)
     fresh = load_reference_model(scratch).build_generator().state_dict()
