@@ -92,6 +92,11 @@ def train_ref(
         "crop that sharpens it, run by `clone drive` (default from --size 128 up, with detailed pose maps). "
         "Measured at 10 minutes on a real reference: face SSIM 0.876 against 0.692, the person's box 0.915 "
         "against 0.910. When resuming, the stored choice.")] = None,
+    exemplars: Annotated[bool | None, typer.Option(
+        "--exemplars/--no-exemplars", help="Give the generator, for each frame, the reference's own frame "
+        "nearest in pose laid onto the pose (the head by its face points) to copy the clothes' and the face's "
+        "detail from; the frames it comes from are stored in the model (default from --size 256 up). "
+        "MEASURED. When resuming, the stored choice.")] = None,
     face_gan: Annotated[float | None, typer.Option(
         "--face-gan", min=0.0, max=100.0, help="Weight of a second discriminator on the face (training only; "
         "detailed pose maps). Measured at 10 minutes on a real reference, without the face pass: face SSIM 0.768 "
@@ -154,7 +159,7 @@ def train_ref(
         if face_gan is not None:
             raise InputError("--face-gan: a resumed model keeps the losses it was trained with")
         if size is not None or batch_size is not None or background is not None or details is not None \
-                or face_pass is not None:
+                or face_pass is not None or exemplars is not None:
             from clone.train_ref import load_resumable
 
             stored = load_resumable(out).training["config"]
@@ -169,6 +174,10 @@ def train_ref(
             if face_pass is not None and face_pass != stored_pass:
                 raise InputError(f"--{'' if face_pass else 'no-'}face-pass: the model was trained "
                                  f"{'with' if stored_pass else 'without'} a face pass; cannot resume so")
+            stored_exemplars = bool(stored.get("exemplar", False))
+            if exemplars is not None and exemplars != stored_exemplars:
+                raise InputError(f"--{'' if exemplars else 'no-'}exemplars: the model was trained "
+                                 f"{'with' if stored_exemplars else 'without'} exemplars; cannot resume so")
             config = TrainConfig(size=size if size is not None else int(stored["size"]),
                                  batch_size=batch_size if batch_size is not None else int(stored["batch_size"]))
     else:
@@ -177,7 +186,7 @@ def train_ref(
         config = TrainConfig(size=size or DEFAULT_SIZE, canvas_mode=canvas.value, batch_size=batch_size or per_process,
                              background=background is not False,
                              pose_layout="body15" if details is False else "body31",
-                             face_pass=False if details is False else face_pass,
+                             face_pass=False if details is False else face_pass, exemplar=exemplars,
                              loss=LossConfig(face_gan=face_gan or 0.0))
         if init is None:
             from clone.train_ref.prior import matching_prior

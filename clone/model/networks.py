@@ -35,7 +35,7 @@ class GeneratorConfig:
     """U-Net generator.
 
     Attributes:
-        in_channels: pose map (3) + previous frame (3).
+        in_channels: pose map (3) + previous frame (3) + exemplar (3, when it sees one); see :func:`generator_input`.
         out_channels: RGB.
         base_channels: channels after the first down-sampling; doubled per level up to ``max_channels``.
         depth: number of stride-2 levels; the bottleneck is ``size / 2**depth`` pixels wide (>= 2).
@@ -45,6 +45,10 @@ class GeneratorConfig:
         alpha: the last layer also gives an alpha mask, and the frame is the RGB composited over the background
             plate passed to ``forward`` (see :func:`composite`).
         plate_input: the plate passed to ``forward`` is 3 more input channels (after ``in_channels``).
+        exemplar: the last 3 of ``in_channels`` are an exemplar (:mod:`clone.model.exemplar`: the reference's own
+            frame laid onto the pose), and the head gives one more channel, a blend mask: the RGB is
+            ``blend * exemplar + (1 - blend) * painted`` (before the alpha composite), so what lines up is copied
+            sharp, not painted.
     """
 
     in_channels: int = POSE_CHANNELS + FRAME_CHANNELS
@@ -55,6 +59,7 @@ class GeneratorConfig:
     upsample: str = "transpose"
     alpha: bool = False
     plate_input: bool = False
+    exemplar: bool = False
 
     def __post_init__(self) -> None:
         for name in ("in_channels", "out_channels", "base_channels", "depth", "max_channels"):
@@ -62,6 +67,9 @@ class GeneratorConfig:
                 raise ValueError(f"GeneratorConfig.{name} must be >= 1, got {getattr(self, name)}")
         if self.upsample not in UPSAMPLERS:
             raise ValueError(f"unknown upsample {self.upsample!r}; valid: {', '.join(sorted(UPSAMPLERS))}")
+        if self.exemplar and (self.in_channels < POSE_CHANNELS + FRAME_CHANNELS or self.out_channels != FRAME_CHANNELS):
+            raise ValueError("GeneratorConfig.exemplar blends an RGB exemplar (the last 3 input channels) into RGB: "
+                             f"in_channels must be >= 6 and out_channels 3, got {self.in_channels}, {self.out_channels}")
         if self.alpha and self.out_channels != FRAME_CHANNELS:
             raise ValueError(f"GeneratorConfig.alpha composites RGB over the plate: out_channels must be "
                              f"{FRAME_CHANNELS}, got {self.out_channels}")
@@ -119,17 +127,21 @@ def default_depth(size: int) -> int:
     return int(math.log2(size)) - 2
 
 
-def generator_input(pose_map: Tensor, prev_frame: Tensor) -> Tensor:
+def generator_input(pose_map: Tensor, prev_frame: Tensor | None, exemplar: Tensor | None = None) -> Tensor:
     """The generator's input.
 
     Args:
         pose_map: [B, 3, H, W] pose map of the frame to make, in [-1, 1].
-        prev_frame: [B, 3, H, W] previous frame in [-1, 1], or zeros when there is none.
+        prev_frame: [B, 3, H, W] previous frame in [-1, 1], or zeros when there is none; None for a generator
+            that does not see it.
+        exemplar: [B, 3, H, W] the reference's frame laid onto the pose (:mod:`clone.model.exemplar`) in
+            [-1, 1], for a generator that sees one.
 
     Returns:
-        [B, 6, H, W].
+        [B, 3 to 9, H, W]: the pose map, then the previous frame, then the exemplar.
     """
-    return torch.cat([pose_map, prev_frame], dim=1)
+    parts = [pose_map] + [t for t in (prev_frame, exemplar) if t is not None]
+    return parts[0] if len(parts) == 1 else torch.cat(parts, dim=1)
 
 
 def discriminator_input(pose_prev: Tensor, pose_cur: Tensor, frame_prev: Tensor, frame_cur: Tensor) -> Tensor:
@@ -225,7 +237,7 @@ class UNetGenerator(nn.Module):
             ups.append(_Up(c_in, c[i], config.upsample))
         self.ups = nn.ModuleList(ups)
         c_head = 2 * c[0] if config.depth > 1 else c[0]
-        c_out = config.out_channels + (ALPHA_CHANNELS if config.alpha else 0)
+        c_out = config.out_channels + (ALPHA_CHANNELS if config.alpha else 0) + (1 if config.exemplar else 0)
         self.head = nn.Sequential(UPSAMPLERS[config.upsample](c_head, c_out, True), nn.Tanh())
         if config.alpha:
             with torch.no_grad():
@@ -243,6 +255,8 @@ class UNetGenerator(nn.Module):
         """
         if self.config.uses_plate and plate is None:
             raise ValueError("this generator composites over (or sees) a background plate; pass plate=")
+        exemplar = x[:, self.config.in_channels - FRAME_CHANNELS:self.config.in_channels] if self.config.exemplar \
+            else None  # [B, 3, H, W]
         if self.config.plate_input:
             x = torch.cat([x, plate.expand(x.shape[0], -1, -1, -1)], dim=1)  # [B, in_channels + 3, H, W]
         skips = []
@@ -253,7 +267,11 @@ class UNetGenerator(nn.Module):
         for up in self.ups:
             x = up(x)
             x = torch.cat([x, skips.pop()], dim=1)  # [B, 2*c[i], H/2**(i+1), W/2**(i+1)]
-        out = self.head(x)  # [B, out_channels (+ 1 alpha), H, W]
+        out = self.head(x)  # [B, out_channels (+ 1 alpha) (+ 1 blend), H, W]
+        if exemplar is not None:
+            blend = (out[:, -1:] + 1.0) * 0.5  # [B, 1, H, W] in [0, 1]
+            rgb = blend * exemplar + (1.0 - blend) * out[:, :FRAME_CHANNELS]
+            out = torch.cat([rgb, out[:, FRAME_CHANNELS:-1]], dim=1)  # [B, 3 (+ 1 alpha), H, W]
         return composite(out, plate) if self.config.alpha else out
 
 

@@ -18,6 +18,8 @@ Contents (a plain dict saved with ``torch.save`` and loaded with ``weights_only=
 - ``face_pass`` (optional): ``{"config", "state_dict", "radius"}``, the face pass (:mod:`clone.model.face`): its
   U-Net's config and weights and the reference's face radius on the canvas; `clone drive` runs it after the
   generator. Files without it drive as before.
+- ``exemplars`` (optional): the bank of reference frames a generator that sees exemplars takes them from
+  (:mod:`clone.model.exemplar`: JPEG frames on the canvas, their joints and frame numbers).
 - ``training`` (optional): the run's record and resume state, written by `clone train-ref` atomically with
   the weights: ``steps``, ``seconds``, ``device``, ``config`` (the ``TrainConfig`` as a dict), ``trainer``
   (discriminator, both optimisers, step; the face pass's optimiser and discriminator) and ``rng`` (the run's
@@ -43,6 +45,7 @@ import numpy as np
 import torch
 
 from clone.model.canvas import Canvas
+from clone.model.exemplar import ExemplarBank
 from clone.model.face import FacePass
 from clone.model.networks import GeneratorConfig, UNetGenerator, build_generator
 from clone.model.tensors import to_tensor
@@ -82,6 +85,8 @@ class ReferenceModel:
             ``body31`` (with face, hands and feet; :mod:`clone.model.detail_map`).
         face_pass: ``{"config": GeneratorConfig dict, "state_dict", "radius": canvas pixels}`` of the face pass
             (:mod:`clone.model.face`), or None.
+        exemplars: the bank of reference frames the generator's exemplars come from (:mod:`clone.model.exemplar`),
+            or None (a generator that sees none, or a prior).
     """
 
     generator_name: str
@@ -99,6 +104,7 @@ class ReferenceModel:
     plate: np.ndarray | None = None
     pose_layout: str = LAYOUT
     face_pass: dict[str, Any] | None = None
+    exemplars: ExemplarBank | None = None
 
     def build_generator(self, device: torch.device | str = "cpu") -> UNetGenerator:
         """The generator with its weights, in eval mode on ``device``."""
@@ -118,6 +124,11 @@ class ReferenceModel:
         """The face pass ready to drive (:class:`clone.model.face.FacePass`), or None for a model without one."""
         net = self.face_pass_net(device)
         return None if net is None else FacePass(net, float(self.face_pass["radius"]))
+
+    @property
+    def sees_exemplar(self) -> bool:
+        """Whether the generator reads an exemplar (:attr:`GeneratorConfig.exemplar`)."""
+        return self.generator_config.exemplar
 
     def plate_tensor(self, device: torch.device | str = "cpu") -> torch.Tensor | None:
         """The background plate as the generator takes it, [1, 3, S, S] in [-1, 1] on ``device``; None without one."""
@@ -217,6 +228,8 @@ def save_reference_model(model: ReferenceModel, path: str | os.PathLike, overwri
             "state_dict": {k: v.detach().cpu().clone() for k, v in model.face_pass["state_dict"].items()},
             "radius": float(model.face_pass["radius"]),
         }
+    if model.exemplars is not None:
+        payload["exemplars"] = model.exemplars.to_storable()
     if model.training is not None:
         # As it is: optimiser states have int keys and tensors that _to_storable would change.
         payload["training"] = _to_cpu(model.training)
@@ -319,7 +332,12 @@ def load_reference_model(path: str | os.PathLike) -> ReferenceModel:
             plate=_plate(data.get("background"), config, canvas),
             pose_layout=_pose_layout(data.get("pose_layout", LAYOUT)),
             face_pass=_face_pass(data.get("face_pass")),
+            exemplars=None if data.get("exemplars") is None else ExemplarBank.from_storable(data["exemplars"],
+                                                                                            canvas.size),
         )
+        # a prior has none: a reference started from it chooses its own
+        if model.sees_exemplar and model.exemplars is None and "prior" not in (model.training or {}):
+            raise ValueError("the generator reads exemplars, but the file holds no exemplar frames")
         model.build_generator("cpu")  # fails here, not mid-drive, when the weights do not fit the config
         model.face_pass_net("cpu")
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:

@@ -19,7 +19,7 @@ from clone.model.networks import generator_input
 from clone.model.reference import ReferenceModel
 from clone.model.tensors import to_images, to_tensor
 from clone.runtime.pipeline import prefetch
-from clone.runtime.pose_maps import draw_pose_maps
+from clone.runtime.pose_maps import draw_inputs
 from pose_io.errors import InputError
 from pose_io.track import PoseTrack
 
@@ -125,21 +125,23 @@ def _generator_frames(
     prev = torch.zeros(1, 3, size, size, device=device)  # no previous frame yet: zeros, as in training
     plate = model.plate_tensor(device)  # [1, 3, S, S], or None for a model trained without one
     # Later chunks are drawn in a thread while the generator works on this one (clone.runtime.pipeline).
-    for maps in prefetch(draw_pose_maps(model, track, chunk), depth=2, name="draw-pose-maps"):
+    for maps, exemplars in prefetch(draw_inputs(model, track, chunk), depth=2, name="draw-pose-maps"):
         # The grad mode is entered and left between yields: a context held across a yield would leak into
         # the caller, and interleaved streams would restore each other's modes in the wrong order.
         with torch.inference_mode():
             pose = to_tensor(maps).to(device)  # [C, 3, S, S]
+            seen = None if exemplars is None else to_tensor(exemplars).to(device)  # [C, 3, S, S]
         if not model.temporal:
             with torch.inference_mode():
-                out = net(pose, plate)  # [C, 3, S, S]
+                out = net(generator_input(pose, None, seen), plate)  # [C, 3, S, S]
             for i in range(len(maps)):
                 yield maps[i], pose[i:i + 1], out[i:i + 1]
             continue
         for i in range(len(maps)):  # one frame at a time, so the encoder gets each as soon as it is made
             with torch.inference_mode():
                 # the next frame is conditioned on the generator's own frame, as in training
-                prev = net(generator_input(pose[i:i + 1], prev), plate)  # [1, 3, S, S]
+                ex = None if seen is None else seen[i:i + 1]
+                prev = net(generator_input(pose[i:i + 1], prev, ex), plate)  # [1, 3, S, S]
             yield maps[i], pose[i:i + 1], prev
 
 

@@ -31,7 +31,7 @@ from clone.model.networks import generator_input
 from clone.model.reference import ReferenceModel
 from clone.model.tensors import to_tensor
 from clone.runtime.onnx import OnnxGenerator
-from clone.runtime.pose_maps import draw_pose_maps
+from clone.runtime.pose_maps import draw_inputs
 from pose_io.atomic import atomic_file, mark_used, prune_lru
 from pose_io.errors import raise_if_interrupted
 
@@ -88,7 +88,9 @@ def cache_key(model: ReferenceModel, config: QuantConfig) -> str:
         tensor = model.generator_state[name].detach().cpu().contiguous()
         h.update(f"{name} {tensor.dtype} {tuple(tensor.shape)}".encode())
         h.update(tensor.reshape(-1).view(torch.uint8).numpy().tobytes())  # raw bytes, whatever the dtype
-    for array in (model.plate, calibration.joints, calibration.confidence):
+    bank = model.exemplars
+    for array in (model.plate, calibration.joints, calibration.confidence, None if bank is None else bank.joints,
+                  None if bank is None else bank.images):
         h.update(b"none" if array is None else np.ascontiguousarray(array).tobytes())
     return h.hexdigest()
 
@@ -103,7 +105,9 @@ def calibration_feeds(model: ReferenceModel, fp32: OnnxGenerator,
     """
 
     track = model.reference_track.frames(0, min(config.frames, model.reference_track.num_frames))
-    maps = np.concatenate(list(draw_pose_maps(model, track)))  # [N, S, S, 3] uint8
+    drawn = list(draw_inputs(model, track))
+    maps = np.concatenate([m for m, _ in drawn])  # [N, S, S, 3] uint8
+    seen = None if drawn[0][1] is None else to_tensor(np.concatenate([e for _, e in drawn]))  # [N, 3, S, S]
     plate = model.plate_tensor("cpu") if fp32.with_plate else None  # [1, 3, S, S]
     size = model.canvas.size
     prev = torch.zeros(1, 3, size, size)  # no previous frame yet: zeros, as in generate_frames
@@ -111,7 +115,8 @@ def calibration_feeds(model: ReferenceModel, fp32: OnnxGenerator,
     with torch.inference_mode():
         pose = to_tensor(maps)  # [N, 3, S, S]
         for i in range(len(pose)):
-            x = generator_input(pose[i:i + 1], prev) if model.temporal else pose[i:i + 1]  # [1, C_in, S, S]
+            ex = None if seen is None else seen[i:i + 1]
+            x = generator_input(pose[i:i + 1], prev if model.temporal else None, ex)  # [1, C_in, S, S]
             out = fp32(x, plate)  # [1, 3, S, S]
             feed = {"x": x.numpy().copy()}
             if plate is not None:

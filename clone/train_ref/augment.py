@@ -31,8 +31,8 @@ def random_affines(batch: int, size: int, cfg: AugmentConfig, generator: torch.G
 
 
 def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]:
-    """Warp pose maps, frames and the background plate (when the sample has one) with the same [B, 2, 3]
-    matrices (kornia): the plate stays the background of the warped frames.
+    """Warp pose maps, frames and the background plate and exemplars (when the sample has them) with the same
+    [B, 2, 3] matrices (kornia): the plate stays the background of the warped frames.
 
     Pose maps (and the face mask, when there is one) are padded with black (-1; 0), frames and plate by repeating
     their border.
@@ -45,8 +45,8 @@ def warp_batch(sample: dict[str, Tensor], matrices: Tensor) -> dict[str, Tensor]
     poses = torch.cat([sample["pose_prev"], sample["pose_cur"]], dim=1) + 1.0  # [B, 6, S, S], black = 0
     poses = warp_affine(poses, m, (size, size), padding_mode="zeros", align_corners=True) - 1.0
     out["pose_prev"], out["pose_cur"] = poses[:, :3], poses[:, 3:]
-    names = ["frame_prev", "frame_cur"] + (["plate"] if "plate" in sample else [])
-    frames = torch.cat([sample[n] for n in names], dim=1)  # [B, 6 or 9, S, S]
+    names = ["frame_prev", "frame_cur"] + [n for n in ("plate", "exemplar_prev", "exemplar_cur") if n in sample]
+    frames = torch.cat([sample[n] for n in names], dim=1)  # [B, 6 to 15, S, S]
     frames = warp_affine(frames, m, (size, size), padding_mode="border", align_corners=True)
     for i, name in enumerate(names):
         out[name] = frames[:, 3 * i:3 * i + 3]

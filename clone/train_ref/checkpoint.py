@@ -24,6 +24,8 @@ import numpy as np
 import torch
 
 from clone.model.canvas import Canvas
+from clone.model.exemplar import ExemplarBank
+from clone.model.networks import FRAME_CHANNELS, _last_conv, build_generator
 from clone.model.reference import ReferenceModel, load_reference_model, save_reference_model
 from clone.train_ref.config import TrainConfig
 from clone.train_ref.trainer import Trainer
@@ -57,6 +59,8 @@ class ReferenceInfo:
             points, or before the frames are read): the face pass is stored only with it.
         prior: for a generator prior (:mod:`clone.train_ref.prior`), the synthetic performers it trains on
             (``PriorConfig`` as a dict, kept in the training record as ``prior``), else None.
+        exemplars: the bank of the reference's frames its exemplars come from (:mod:`clone.model.exemplar`), or
+            None (a generator that sees none, or a prior, which draws them anew from its performers).
     """
 
     canvas: Canvas
@@ -70,6 +74,7 @@ class ReferenceInfo:
     details: PoseTrack | None = None
     face_radius: float | None = None
     prior: dict[str, Any] | None = None
+    exemplars: ExemplarBank | None = None
 
 
 def checkpoint_model(
@@ -114,6 +119,7 @@ def checkpoint_model(
         plate=reference.plate,
         pose_layout=config.pose_layout,
         face_pass=face_pass,
+        exemplars=reference.exemplars,
     )
 
 
@@ -179,7 +185,9 @@ def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceMo
     """A model to start a new run from (``--init``): its generator, and its discriminator's state when it kept one.
 
     Its generator must be the one ``config`` trains (same size, width, depth, inputs, pose layout): the
-    weights are copied, not adapted.
+    weights are copied, not adapted, but for one case: a model whose generator does not read exemplars starts a
+    run that does with the exemplar's input weights at zero (:func:`with_exemplar_input`), so it begins as
+    that model and learns to use them.
 
     Raises:
         InputError: no such file, not a readable model, or another architecture.
@@ -189,6 +197,8 @@ def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceMo
         raise InputError(f"--init {path}: no such model")
     model = load_reference_model(path)
     differ = generator_differences(model, config)
+    if not differ and config.exemplar and not model.sees_exemplar:
+        model = with_exemplar_input(model)
     if differ:
         raise InputError(f"--init {path}: its generator differs from this run's: {', '.join(differ)}; "
                          "train with the same --size and options, or pass --init none")
@@ -198,9 +208,35 @@ def load_init(path: str | os.PathLike, config: TrainConfig) -> tuple[ReferenceMo
     return model, disc
 
 
+def with_exemplar_input(model: ReferenceModel) -> ReferenceModel:
+    """``model`` with a generator that also reads an exemplar (three more input channels) whose weights are zero:
+    its frames are the same whatever the exemplar."""
+    config = model.generator_config
+    grown = replace(config, in_channels=config.in_channels + FRAME_CHANNELS, exemplar=True)
+    state = dict(model.generator_state)
+    net = build_generator(model.generator_name, config)
+    first = [f"downs.0.{n}" for n, p in net.downs[0].named_parameters() if p.dim() == 4]
+    last = _last_conv(net.head)
+    head = [f"head.{n}" for n, m in net.head.named_modules() if m is last]
+    if len(first) != 1 or len(head) != 1:
+        raise InputError("the model's generator has no single first and last convolution to widen for the exemplar")
+    weight = state[first[0]]  # [C0, C_in, k, k]: zeros for the exemplar's channels
+    state[first[0]] = torch.cat([weight, weight.new_zeros((weight.shape[0], FRAME_CHANNELS, *weight.shape[2:]))], 1)
+    weight, bias = state[f"{head[0]}.weight"], state[f"{head[0]}.bias"]
+    # the blend mask's output: zero weights and bias, a half-and-half blend to start from
+    out_dim = 1 if isinstance(last, torch.nn.ConvTranspose2d) else 0
+    shape = list(weight.shape)
+    shape[out_dim] = 1
+    state[f"{head[0]}.weight"] = torch.cat([weight, weight.new_zeros(shape)], out_dim)
+    state[f"{head[0]}.bias"] = torch.cat([bias, bias.new_zeros(1)])
+    return replace(model, generator_config=grown, generator_state=state)
+
+
 def generator_differences(model: ReferenceModel, config: TrainConfig) -> list[str]:
     """How ``model``'s generator differs from the one a run of ``config`` trains (empty: it can start from it)."""
     want, have = config.generator_config().to_dict(), model.generator_config.to_dict()
+    if want["exemplar"] and not have.get("exemplar"):  # widened to read one (with_exemplar_input)
+        have = {**have, "exemplar": True, "in_channels": have["in_channels"] + FRAME_CHANNELS}
     differ = [f"{k} {have.get(k)} (wanted {v})" for k, v in want.items() if have.get(k) != v]
     if model.pose_layout != config.pose_layout:
         differ.append(f"pose layout {model.pose_layout} (wanted {config.pose_layout})")

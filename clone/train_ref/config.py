@@ -108,6 +108,9 @@ class TrainConfig:
             crop adding a residual, as Everybody Dance Now's face GAN, with its own discriminator), stored in the
             model and run by `clone drive`. None: on from 128² canvases up. Body31 pose maps only (off with
             body15); a reference whose poses have no face points trains none.
+        exemplar: G also gets an exemplar (:mod:`clone.model.exemplar`): the reference's own frame nearest in
+            pose, laid onto the pose asked, as three more input channels; the bank of frames it comes from is
+            stored in the model. None: on from 256² canvases up (fixed in ``__post_init__``).
         pose_layout: what the pose maps show: ``body31`` (body15 with the face, hands and feet, front and back
             told apart, :mod:`clone.model.detail_map`) or ``body15`` (the skeleton alone, as models before it).
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
@@ -152,6 +155,7 @@ class TrainConfig:
     # None: on from 256² up with body31 maps, where it was measured on real footage (docs/cloning.md, "The face
     # pass": 10 minutes, face SSIM 0.867 against 0.692), off below (fixed in __post_init__).
     face_pass: bool | None = None
+    exemplar: bool | None = None
     pose_layout: str = "body31"
     min_visible_joints: int = 10
     steps: int = 2000
@@ -177,6 +181,8 @@ class TrainConfig:
             object.__setattr__(self, "face_pass", False)
         if self.base_channels is None:
             object.__setattr__(self, "base_channels", 16 if self.size >= 256 else 32)
+        if self.exemplar is None:
+            object.__setattr__(self, "exemplar", False)
         if not 0.0 <= self.lr_decay_from <= 1.0:
             raise ValueError(f"lr_decay_from must be a share in [0, 1], got {self.lr_decay_from!r}")
 
@@ -196,8 +202,9 @@ class TrainConfig:
         """The generator this run trains."""
         depth = self.depth if self.depth is not None else default_depth(self.size)
         return GeneratorConfig(
-            in_channels=6 if self.temporal else 3, base_channels=self.base_channels, depth=depth,
+            in_channels=(6 if self.temporal else 3) + (3 if self.exemplar else 0), base_channels=self.base_channels, depth=depth,
             upsample=self.upsample, alpha=self.background, plate_input=self.background and self.plate_input,
+            exemplar=bool(self.exemplar),
         )
 
     def discriminator_config(self) -> DiscriminatorConfig:
@@ -230,4 +237,6 @@ class TrainConfig:
         data.setdefault("lr_decay_from", 1.0)
         # Runs stored before the face pass had none.
         data.setdefault("face_pass", False)
+        # Runs stored before exemplars had none.
+        data.setdefault("exemplar", False)
         return cls(**data, augment=augment, loss=loss, plate=plate)

@@ -21,6 +21,7 @@ from torch import Tensor
 from clone.choices import Align
 from clone.model.background import PlateConfig, estimate_plate
 from clone.model.canvas import render_pose_map
+from clone.model.exemplar import ExemplarBank, training_choices
 from clone.model.face import face_mask, face_radius, standing_height
 from clone.model.reference import LAYOUT, file_sha256
 from clone.model.tensors import to_tensor
@@ -58,6 +59,8 @@ class ReferenceData:
         face_radius: radius of the face's disc each batch carries as ``face`` (:func:`face_mask`), or None: no
             face points, or ``faces=False`` (no loss uses it).
         height: the body's standing height in canvas pixels, or None (the scale of ``AugmentConfig.pose_jitter``).
+        exemplars: the bank the generator's exemplars come from (:meth:`set_exemplars`), or None: no exemplars.
+        exemplar_choices: [N, k] each frame's candidate bank frames (-1: none), with ``exemplars``.
     """
 
     def __init__(self, frames: np.ndarray, joints: np.ndarray, usable: np.ndarray, size: int,
@@ -72,6 +75,26 @@ class ReferenceData:
         # The face's disc only where a loss uses it (it is drawn and warped with every sample).
         self.face_radius = face_radius(joints, self.layout) if faces else None
         self.height = standing_height(joints, self.layout)
+        self.exemplars: ExemplarBank | None = None
+        self.exemplar_choices: np.ndarray | None = None
+
+    def groups(self) -> np.ndarray | None:
+        """[N] int, which clip each frame belongs to (an exemplar comes from the frame's own), or None: one."""
+        return None
+
+    def set_exemplars(self, bank: ExemplarBank, gap: int) -> None:
+        """Give every batch exemplars from ``bank``: for each frame one of its nearest bank frames at least
+        ``gap`` frames away (:func:`clone.model.exemplar.training_choices`)."""
+        self.exemplars = bank
+        self.exemplar_choices = training_choices(bank, self.joints, gap, groups=self.groups())
+
+    def exemplar(self, i: int, k: int, mirrored: bool = False) -> np.ndarray:
+        """[S, S, 3] uint8 bank frame ``k`` laid onto frame ``i``'s pose (black for i < 0 or k < 0), flipped
+        left-right when ``mirrored``."""
+        if i < 0 or k < 0 or self.exemplars is None:
+            return np.zeros((self.size, self.size, 3), dtype=np.uint8)
+        image = self.exemplars.exemplar(k, self.joints[i])
+        return image[:, ::-1] if mirrored else image
 
     def frame_joints(self, i: int, mirrored: bool = False) -> np.ndarray:
         """[J, 2] frame ``i``'s joints on the canvas; ``mirrored``: as they are in the frame flipped left-right
@@ -98,15 +121,17 @@ class ReferenceData:
         return self.frames[i][:, ::-1] if mirrored else self.frames[i]
 
     def batch(self, idx: np.ndarray, offsets: np.ndarray | None = None,
-              mirror: np.ndarray | None = None) -> dict[str, Tensor]:
+              mirror: np.ndarray | None = None, exemplar_pick: np.ndarray | None = None) -> dict[str, Tensor]:
         """Tensors for frames ``idx`` and their predecessors; ``offsets`` [B, J, 2] moves the joints of sample
         b's two pose maps (not its frames or face disc) by ``offsets[b]`` canvas pixels; ``mirror`` [B] bool
-        flips sample b left-right (frames, plate, face disc; its pose maps drawn from :meth:`frame_joints`).
+        flips sample b left-right (frames, plate, face disc; its pose maps drawn from :meth:`frame_joints`);
+        ``exemplar_pick`` [B] int: which of its candidate exemplars sample b gets (default the nearest).
 
         Returns:
             ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
             frame of frame 0 is zeros); ``has_prev``: [B] bool; with a plate, ``plate``: [B, 3, S, S] (one
-            copy per sample: each is warped with its sample).
+            copy per sample: each is warped with its sample); with exemplars, ``exemplar_prev`` and
+            ``exemplar_cur``: [B, 3, S, S], the sample's one bank frame laid onto each of its two poses.
         """
         prev = self.previous(idx)
         zero = np.zeros((self.size, self.size, 3), dtype=np.uint8)
@@ -122,6 +147,14 @@ class ReferenceData:
             "frame_cur": to_tensor(np.stack([self.frame(i, f) for i, f in zip(idx, flips)])),
             "has_prev": has_prev,
         }
+        if self.exemplar_choices is not None:
+            picks = np.zeros(len(idx), np.int64) if exemplar_pick is None else np.asarray(exemplar_pick)
+            ks = self.exemplar_choices[idx, picks]
+            ks = np.where(ks < 0, self.exemplar_choices[idx, 0], ks)  # fewer candidates than asked: the nearest
+            sample["exemplar_prev"] = to_tensor(np.stack([self.exemplar(int(p), int(k), f)
+                                                          for p, k, f in zip(prev, ks, flips)]))
+            sample["exemplar_cur"] = to_tensor(np.stack([self.exemplar(int(i), int(k), f)
+                                                         for i, k, f in zip(idx, ks, flips)]))
         plates = self.plates(idx)
         if plates is not None:
             flipped = torch.tensor(flips)

@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
+from clone.model.exemplar import GAP_SECONDS, choose_bank
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
 from clone.train_ref.augment import (
     WHOLE_CANVAS_SHARE,
@@ -167,6 +168,7 @@ def train_reference(
         with torch.enable_grad(), frame_store(count, reference.canvas.size) as store:
             data = _read_frames(run, frames, count, usable, store)
             _add_plate(run, data, previous)
+            _add_exemplars(run, data, previous, track.fps)
             rows = preview_rows(data.indices)
             run.started = time.perf_counter()  # --minutes counts training only
             limit_s = minutes * 60.0 if minutes is not None else None
@@ -250,6 +252,21 @@ def _add_plate(run: TrainingRun, data: ReferenceData, previous: ReferenceModel |
     run.reference = replace(run.reference, plate=plate)
 
 
+def _add_exemplars(run: TrainingRun, data: ReferenceData, previous: ReferenceModel | None, fps: float) -> None:
+    """Give a run whose generator reads exemplars its bank (a resumed model keeps its own, a new one chooses it
+    from the frames just read) and its data each frame's candidates (:mod:`clone.model.exemplar`)."""
+    if not run.config.exemplar:
+        return
+    bank = previous.exemplars if previous is not None else None
+    if bank is None:
+        bank = choose_bank(data.frames, data.joints, data.usable)
+    # a second away, or a quarter of a short reference's frames
+    gap = max(1, min(round(GAP_SECONDS * fps), len(data.indices) // 4))
+    data.set_exemplars(bank, gap=gap)
+    run.reference = replace(run.reference, exemplars=bank)
+    log.info("exemplars from %d of the reference's frames", len(bank))
+
+
 def _train_steps(
     run: TrainingRun, data: ReferenceData, rows: np.ndarray, steps: int | None, limit_s: float | None,
     grow: ThreadGrowth | None = None,
@@ -319,8 +336,12 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     mirror = None
     if config.augment.mirror:  # drawn only when asked, so runs without it draw as before
         mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()
+    exemplar_pick = None
+    if data.exemplar_choices is not None:  # drawn only with exemplars, so runs without them draw as before
+        exemplar_pick = torch.randint(data.exemplar_choices.shape[1], (total,), generator=rng).numpy()[part]
     idx = data.indices[pick]
-    sample = warp_batch(data.batch(idx[part], offsets, None if mirror is None else mirror[part]), matrices[part])
+    sample = warp_batch(data.batch(idx[part], offsets, None if mirror is None else mirror[part], exemplar_pick),
+                        matrices[part])
     if config.augment.person_crop:  # drawn only when asked, so runs without it draw as before
         # one window around the whole batch's people (both frames of each sample), the same on every process
         flips = np.zeros(total, bool) if mirror is None else mirror

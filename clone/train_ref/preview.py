@@ -25,7 +25,8 @@ def preview_grid(trainer: Trainer, data: ReferenceData, rows: np.ndarray) -> np.
         trainer.g.eval()
         plate = sample["plate"].to(trainer.device) if "plate" in sample else None
         pose = sample["pose_cur"].to(trainer.device)
-        fake = trainer.generate(pose, sample["frame_prev"].to(trainer.device), plate)
+        exemplar = sample["exemplar_cur"].to(trainer.device) if "exemplar_cur" in sample else None
+        fake = trainer.generate(pose, sample["frame_prev"].to(trainer.device), plate, exemplar)
         trainer.g.train()
         if trainer.face_pass is not None and "face" in sample:
             trainer.face_pass.eval()

@@ -31,6 +31,7 @@ import torch
 from torch import Tensor
 
 from clone.model.canvas import Canvas, choose_canvas, cut_frame, image_to_canvas
+from clone.model.exemplar import choose_bank
 from clone.model.reference import (
     DETAIL_LAYOUT,
     LAYOUT,
@@ -112,6 +113,9 @@ class PerformerData(ReferenceData):
 
     def previous(self, idx: np.ndarray) -> np.ndarray:
         return np.where(self.first[idx], -1, idx - 1)
+
+    def groups(self) -> np.ndarray:
+        return self.owner
 
     def plates(self, idx: np.ndarray) -> Tensor:
         return to_tensor(self.performer_plates[self.owner[idx]])
@@ -256,6 +260,9 @@ def train_prior(
         steps = config.steps
     device = torch.device(device)
     data, record = render_performers(mocap, prior, config.size, config, progress)
+    if config.exemplar:  # every frame is in the bank; a frame's exemplar is its own performer's, a quarter clip away
+        data.set_exemplars(choose_bank(data.frames, data.joints, data.usable, max_count=len(data.frames)),
+                           gap=max(1, prior.frames // 4))
     canvas = Canvas(x0=0, y0=0, side=config.size, size=config.size, image_size=(config.size, config.size))
     details = None
     if config.pose_layout == DETAIL_LAYOUT:

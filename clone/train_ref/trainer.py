@@ -113,10 +113,18 @@ class Trainer:
             for group in optimiser.param_groups:
                 group["lr"] = self.config.lr * factor
 
-    def generate(self, pose: Tensor, prev: Tensor, plate: Tensor | None = None) -> Tensor:
-        """G's frame (float32) for [B, 3, S, S] pose maps, previous frames and background plates (or None)."""
+    def generate(self, pose: Tensor, prev: Tensor, plate: Tensor | None = None, exemplar: Tensor | None = None
+                 ) -> Tensor:
+        """G's frame (float32) for [B, 3, S, S] pose maps, previous frames, background plates (or None) and
+        exemplars (or None)."""
         with distributed.autocast(self.device, self.dtype):
-            return self.g(generator_input(pose, prev) if self.config.temporal else pose, plate).float()
+            return self.g(self.g_input(pose, prev, exemplar), plate).float()
+
+    def g_input(self, pose: Tensor, prev: Tensor, exemplar: Tensor | None) -> Tensor:
+        """What G reads (:func:`clone.model.networks.generator_input`): the previous frame only when temporal,
+        the exemplar only when it sees one."""
+        return generator_input(pose, prev if self.config.temporal else None,
+                               exemplar if self.config.exemplar else None)
 
     def refine_faces(self, frame: Tensor, pose: Tensor, face: Tensor) -> Tensor:
         """G's frames [B, 3, S, S] with the face pass applied where ``face`` [B, 1, S, S] (the samples' face
@@ -151,7 +159,8 @@ class Trainer:
         cfg = self.config
         if cfg.prev_source == "generated":
             with torch.no_grad():
-                prev = self.generate(sample["pose_prev"], torch.zeros_like(sample["frame_prev"]), sample.get("plate"))
+                prev = self.generate(sample["pose_prev"], torch.zeros_like(sample["frame_prev"]), sample.get("plate"),
+                                     sample.get("exemplar_prev"))
         else:
             prev = sample["frame_prev"]
         has_prev = sample["has_prev"]
@@ -186,7 +195,7 @@ class Trainer:
         fake_pair = (sample["pose_prev"], sample["pose_cur"], sample["frame_prev"] if fake_prev is None else fake_prev)
 
         with distributed.autocast(self.device, self.dtype):
-            g_in = generator_input(sample["pose_cur"], prev_input) if self.config.temporal else sample["pose_cur"]
+            g_in = self.g_input(sample["pose_cur"], prev_input, sample.get("exemplar_cur"))
             fake = self._g_step(g_in, sample.get("plate")).float()  # [B, 3, S, S]
             # The plain D: its parameters get no gradient here, which DistributedDataParallel would wait for.
             self.d.requires_grad_(False)
