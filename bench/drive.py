@@ -78,12 +78,13 @@ def child(args: dict[str, Any]) -> dict[str, Any]:
     net = build_drive_generator(model, torch.device("cpu"), runtime)  # what drive ran
     size = model.canvas.size
     pose, prev = torch.zeros(1, 3, size, size), torch.zeros(1, 3, size, size)
+    exemplar = torch.zeros(1, 3, size, size) if model.sees_exemplar else None
     plate = model.plate_tensor("cpu")  # [1, 3, S, S], None for a model trained without one
 
     def generator_only() -> None:
         with torch.inference_mode():
             for _ in range(50):
-                net(generator_input(pose, prev), plate)
+                net(generator_input(pose, prev, exemplar), plate)
 
     gen = time_call(generator_only, 5, 1)
     out = {"frames": result.frames, "seconds": seconds, "fps": result.frames / seconds, "peak_rss_mb": peak,
