@@ -75,3 +75,23 @@ def test_a_model_that_reads_exemplars_without_its_bank_does_not_load(exemplar_mo
     save_reference_model(dataclasses.replace(model, exemplars=None), broken)
     with pytest.raises(InputError, match="exemplar"):
         load_reference_model(broken)
+
+
+def test_train_ref_takes_exemplars_on_request_and_keeps_the_choice_when_resuming(reference, tmp_path):
+    from typer.testing import CliRunner
+
+    from clone.cli.main import app
+    from tests.clone.train_ref.helpers import one_line_error, train_args
+
+    poses, frames = reference
+    out = tmp_path / "ref.pt"
+    result = CliRunner().invoke(app, train_args(poses, frames, out, "--exemplars", steps=1))
+    assert result.exit_code == 0, result.output
+    assert load_reference_model(out).exemplars is not None
+    line = one_line_error(CliRunner().invoke(app, train_args(poses, frames, out, "--resume", "--no-exemplars",
+                                                             steps=2)))
+    assert "exemplars" in line
+    assert load_reference_model(out).training["steps"] == 1  # nothing was overwritten
+    plain = tmp_path / "plain.pt"
+    assert CliRunner().invoke(app, train_args(poses, frames, plain, steps=1)).exit_code == 0
+    assert load_reference_model(plain).exemplars is None  # off below 256² by default
