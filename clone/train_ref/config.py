@@ -110,7 +110,7 @@ class TrainConfig:
             body15); a reference whose poses have no face points trains none.
         exemplar: G also gets an exemplar (:mod:`clone.model.exemplar`): the reference's own frame nearest in
             pose, laid onto the pose asked, as three more input channels; the bank of frames it comes from is
-            stored in the model. None: on from 256² canvases up (fixed in ``__post_init__``).
+            stored in the model. None: on from 128² canvases up (fixed in ``__post_init__``).
         pose_layout: what the pose maps show: ``body31`` (body15 with the face, hands and feet, front and back
             told apart, :mod:`clone.model.detail_map`) or ``body15`` (the skeleton alone, as models before it).
         min_visible_joints: frames whose pose has fewer visible body15 joints are skipped.
@@ -155,8 +155,9 @@ class TrainConfig:
     # None: on from 256² up with body31 maps, where it was measured on real footage (docs/cloning.md, "The face
     # pass": 10 minutes, face SSIM 0.867 against 0.692), off below (fixed in __post_init__).
     face_pass: bool | None = None
-    # None: on from 256² up, where it was measured on real footage (docs/cloning.md, "Exemplars": 3 minutes from the
-    # prior, one thread, person box 0.885 / 25.3 dB against 0.868 / 24.9 and 0.926 / 25.8 against 0.909 / 24.6).
+    # None: on from 128² up, where it was measured on real footage (docs/cloning.md, "Exemplars": 3 minutes, one
+    # thread, person box 0.885 / 25.3 dB against 0.868 / 24.9 and 0.926 / 25.8 against 0.909 / 24.6 at 256² from
+    # the prior, 0.928 / 28.0 against 0.892 / 25.9 at 128² from random weights).
     exemplar: bool | None = None
     pose_layout: str = "body31"
     min_visible_joints: int = 10
@@ -184,7 +185,7 @@ class TrainConfig:
         if self.base_channels is None:
             object.__setattr__(self, "base_channels", 16 if self.size >= 256 else 32)
         if self.exemplar is None:
-            object.__setattr__(self, "exemplar", self.size >= 256)
+            object.__setattr__(self, "exemplar", self.size >= 128)
         if not 0.0 <= self.lr_decay_from <= 1.0:
             raise ValueError(f"lr_decay_from must be a share in [0, 1], got {self.lr_decay_from!r}")
 

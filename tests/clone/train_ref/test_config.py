@@ -34,7 +34,8 @@ def test_background_settings_round_trip_and_older_runs_had_none():
     config = TrainConfig(plate_input=True, plate=PlateConfig(max_frames=20, margin=0.3))
     assert TrainConfig.from_dict(config.to_dict()) == config
     g = config.generator_config()
-    assert g.alpha and g.plate_input and g.in_channels == 6
+    assert g.alpha and g.plate_input and g.in_channels == 9 and g.exemplar  # pose, previous frame, exemplar
+    assert TrainConfig(size=64).generator_config().in_channels == 6  # no exemplar below 128²
     assert not TrainConfig(background=False, plate_input=True).generator_config().uses_plate
     old = {k: v for k, v in TrainConfig().to_dict().items() if k not in ("background", "plate_input", "plate")}
     assert TrainConfig.from_dict(old) == TrainConfig(background=False)

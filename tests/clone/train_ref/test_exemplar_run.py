@@ -94,4 +94,4 @@ def test_train_ref_takes_exemplars_on_request_and_keeps_the_choice_when_resuming
     assert load_reference_model(out).training["steps"] == 1  # nothing was overwritten
     plain = tmp_path / "plain.pt"
     assert CliRunner().invoke(app, train_args(poses, frames, plain, steps=1)).exit_code == 0
-    assert load_reference_model(plain).exemplars is None  # off below 256² by default
+    assert load_reference_model(plain).exemplars is None  # off below 128² by default

@@ -188,7 +188,8 @@ def test_person_crops_train_on_a_window_and_the_model_drives_the_whole_canvas(re
     assert any(hw != (128, 128) for hw in widths)  # the performer does not fill the canvas
     model = load_reference_model(out)
     assert model.canvas.size == 128
-    assert model.build_generator()(torch.zeros(1, 6, 128, 128), model.plate_tensor()).shape == (1, 3, 128, 128)
+    channels = model.generator_config.in_channels
+    assert model.build_generator()(torch.zeros(1, channels, 128, 128), model.plate_tensor()).shape == (1, 3, 128, 128)
 
 
 def test_a_run_started_from_another_model_takes_the_init_learning_rate(reference, tmp_path):
