@@ -3,9 +3,10 @@ generator.
 
 A pose map says where the limbs go, not what the lace, the face or the shoes look like; a generator trained for
 minutes paints them as a blur. The reference's own frames hold them. For each frame to make, the nearest of a
-bank of reference frames (in pose, after centring on the hips and scaling by the torso) is scaled and shifted so
-that its joints lie on the asked ones (least squares over the body15 joints both show) and given to the generator
-as three more input channels; it copies what lines up and paints the rest from the pose map.
+bank of reference frames (in pose, after centring on the hips and scaling by the torso) is laid onto the asked
+pose by a similarity (least squares over the body15 joints both show; the head again by its face points,
+:func:`with_head`) and given to the generator as three more input channels, which it blends into what it paints
+(:class:`clone.model.networks.GeneratorConfig` ``exemplar``): it copies what lines up and paints the rest.
 
 - **The bank** (:class:`ExemplarBank`): up to ``max_count`` usable frames of the reference chosen to cover its
   poses (farthest-point sampling), stored in the model as JPEG with their joints (a few MB at 256²).

@@ -176,3 +176,13 @@ def test_plain_shirts_are_drawn_and_older_runs_keep_their_patterned_performers(m
     assert not np.array_equal(plain.frames, striped.frames)
     stored = {k: v for k, v in patterned.to_dict().items() if k != "plain_share"}
     assert PriorConfig.stored(stored) == patterned and PriorConfig.stored(SMALL.to_dict()) == SMALL
+
+
+def test_a_prior_with_exemplars_draws_them_from_each_performer_and_stores_no_bank(mocap, tmp_path):
+    run = tmp_path / "ex_prior.pt"
+    train_prior(mocap, run, config=TrainConfig(size=64, exemplar=True), prior=SMALL, steps=1)
+    model = load_reference_model(run)  # a prior may read exemplars without a bank: a reference brings its own
+    assert model.sees_exemplar and model.exemplars is None
+    export_prior(run, tmp_path / "ex_small.pt")
+    start, _ = load_init(tmp_path / "ex_small.pt", TrainConfig(size=64, exemplar=True))
+    assert start.sees_exemplar
