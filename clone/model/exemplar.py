@@ -19,6 +19,7 @@ pose by a similarity (least squares over the body15 joints both show; the head a
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,6 +49,14 @@ TRAIN_K = 3
 GAP_SECONDS = 1.0
 # Driving: the exemplar changes only when another bank frame is nearer by this share of the current distance.
 STICKINESS = 0.2
+# Limb chains of body15 (right arm, left arm, right leg, left leg; shoulder or hip first). Where a joint of a chain
+# laid on lies more than STRAY torsos from the asked one (arms down in the exemplar, raised in the pose asked), the
+# exemplar is blacked out along the chain as laid on and as asked, LIMB_RADIUS torsos either side (the end joint's
+# hand or foot a disc of HAND_RADIUS): the generator paints that limb itself instead of copying a wrong one.
+LIMBS = ((2, 3, 4), (5, 6, 7), (9, 10, 11), (12, 13, 14))
+STRAY = 0.35
+LIMB_RADIUS = 0.16
+HAND_RADIUS = 0.3
 
 
 def pose_features(joints: np.ndarray) -> np.ndarray:
@@ -124,6 +133,41 @@ def fit_onto(src: np.ndarray, dst: np.ndarray, joints: list[int] | None = None) 
     return np.concatenate([rot, (qc - rot @ pc)[:, None]], axis=1)
 
 
+def transform(joints: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """[J, 2] ``joints`` moved by ``matrix`` [2, 3] (NaN kept)."""
+    joints = np.asarray(joints, np.float64)
+    return joints @ matrix[:, :2].T + matrix[:, 2]
+
+
+def stray_limbs(laid: np.ndarray, asked: np.ndarray) -> list[int]:
+    """Indices into :data:`LIMBS` of the chains of the exemplar's joints as laid on (``laid`` [J, 2]) that stray
+    from ``asked`` [J, 2]: a joint both show more than :data:`STRAY` torsos (of the asked pose) apart."""
+    torso = float(np.linalg.norm(asked[_NECK] - asked[_MID_HIP]))
+    if not np.isfinite(torso) or torso < 1.0:
+        return []
+    out = []
+    for c, chain in enumerate(LIMBS):
+        d = np.linalg.norm(laid[list(chain)] - asked[list(chain)], axis=-1)
+        if np.nanmax(np.where(np.isfinite(d), d, 0.0)) > STRAY * torso:
+            out.append(c)
+    return out
+
+
+def limb_mask(size: int, torso: float, chains: list[np.ndarray]) -> np.ndarray:
+    """[S, S] bool, the band around each of ``chains`` (each [L, 2] canvas joints, NaN skipped): segments
+    :data:`LIMB_RADIUS` torsos either side, a disc of :data:`HAND_RADIUS` at the chain's end."""
+    mask = np.zeros((size, size), np.uint8)
+    half, hand = max(1, round(LIMB_RADIUS * torso)), max(1, round(HAND_RADIUS * torso))
+    for chain in chains:
+        points = [p for p in np.asarray(chain, np.float64) if np.isfinite(p).all()]
+        ends = [(round(float(x)), round(float(y))) for x, y in np.clip(points, -4 * size, 5 * size)]
+        for a, b in itertools.pairwise(ends):
+            cv2.line(mask, a, b, 1, thickness=2 * half + 1)
+        if ends:
+            cv2.circle(mask, ends[-1], hand, 1, thickness=-1)
+    return mask.astype(bool)
+
+
 def warp_onto(image: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     """[S, S, 3] uint8 ``image`` moved by ``matrix`` [2, 3] (its border repeated where it uncovers the canvas)."""
     size = image.shape[0]
@@ -178,11 +222,26 @@ class ExemplarBank:
     def __len__(self) -> int:
         return len(self.frames)
 
-    def exemplar(self, k: int, joints: np.ndarray) -> np.ndarray:
+    def exemplar(self, k: int, joints: np.ndarray, drop: tuple[int, ...] = ()) -> np.ndarray:
         """[S, S, 3] uint8 bank frame ``k`` laid onto ``joints`` [J, 2] (canvas pixels): the body by its body15
-        joints, and the head by its face points where both show three or more (:func:`with_head`)."""
-        body = warp_onto(self.images[k], fit_onto(self.joints[k], joints))
-        return with_head(body, self.images[k], self.joints[k], joints)
+        joints, and the head by its face points where both show three or more (:func:`with_head`); black along
+        the limbs that stray from the asked ones (:func:`stray_limbs`) and the chains of :data:`LIMBS` indexed
+        by ``drop`` (training: the generator learns to paint a limb where the exemplar shows none)."""
+        matrix = fit_onto(self.joints[k], joints)
+        out = with_head(warp_onto(self.images[k], matrix), self.images[k], self.joints[k], joints)
+        laid = transform(self.joints[k], matrix)
+        blank = sorted(set(stray_limbs(laid, joints)) | set(drop))
+        if not blank:
+            return out
+        torso = float(np.linalg.norm(joints[_NECK] - joints[_MID_HIP]))
+        if not np.isfinite(torso) or torso < 1.0:
+            torso = float(np.nanmedian(np.linalg.norm(self.joints[:, _NECK] - self.joints[:, _MID_HIP], axis=-1)))
+        if not np.isfinite(torso) or torso < 1.0:
+            return out
+        chains = [pose[list(LIMBS[c])] for c in blank for pose in (laid, joints)]
+        out = out.copy()
+        out[limb_mask(out.shape[0], torso, chains)] = 0
+        return out
 
     def to_storable(self) -> dict[str, Any]:
         """What the model file keeps: JPEG bytes per frame, joints, frame numbers."""
@@ -270,5 +329,5 @@ def drive_choices(bank: ExemplarBank, joints: np.ndarray, stickiness: float = ST
     return out
 
 
-__all__ = ["ExemplarBank", "choose_bank", "drive_choices", "fit_onto", "pose_distances", "pose_features",
-           "training_choices", "warp_onto"]
+__all__ = ["ExemplarBank", "choose_bank", "drive_choices", "fit_onto", "limb_mask", "pose_distances",
+           "pose_features", "stray_limbs", "training_choices", "transform", "warp_onto"]

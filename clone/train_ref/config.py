@@ -33,6 +33,10 @@ class AugmentConfig:
             already gives (1.3-1.6x the steps on the two fashion videos of ``../shared/real``). Driving still runs
             on the whole canvas, whose instance-norm statistics differ from a window's: on the demo's checked
             shirt the texture came out washed, so it is off by default.
+        exemplar_drop: share of the samples (with exemplars) whose exemplar is blacked out along one limb chosen
+            at random (:data:`clone.model.exemplar.LIMBS`), as driving blacks out a limb that strays from the pose
+            asked: the generator learns to paint a limb the exemplar does not show (raised arms the reference
+            never made).
     """
 
     rotation_deg: float = 3.0
@@ -43,6 +47,7 @@ class AugmentConfig:
     pose_jitter: float = 0.0
     mirror: float = 0.0
     person_crop: bool = False
+    exemplar_drop: float = 0.25
 
 
 @dataclass(frozen=True)

@@ -88,12 +88,13 @@ class ReferenceData:
         self.exemplars = bank
         self.exemplar_choices = training_choices(bank, self.joints, gap, groups=self.groups())
 
-    def exemplar(self, i: int, k: int, mirrored: bool = False) -> np.ndarray:
+    def exemplar(self, i: int, k: int, mirrored: bool = False, drop: int = -1) -> np.ndarray:
         """[S, S, 3] uint8 bank frame ``k`` laid onto frame ``i``'s pose (black for i < 0 or k < 0), flipped
-        left-right when ``mirrored``."""
+        left-right when ``mirrored``; ``drop`` >= 0: black along that limb too
+        (:meth:`clone.model.exemplar.ExemplarBank.exemplar`)."""
         if i < 0 or k < 0 or self.exemplars is None:
             return np.zeros((self.size, self.size, 3), dtype=np.uint8)
-        image = self.exemplars.exemplar(k, self.joints[i])
+        image = self.exemplars.exemplar(k, self.joints[i], () if drop < 0 else (drop,))
         return image[:, ::-1] if mirrored else image
 
     def frame_joints(self, i: int, mirrored: bool = False) -> np.ndarray:
@@ -121,11 +122,13 @@ class ReferenceData:
         return self.frames[i][:, ::-1] if mirrored else self.frames[i]
 
     def batch(self, idx: np.ndarray, offsets: np.ndarray | None = None,
-              mirror: np.ndarray | None = None, exemplar_pick: np.ndarray | None = None) -> dict[str, Tensor]:
+              mirror: np.ndarray | None = None, exemplar_pick: np.ndarray | None = None,
+              exemplar_drop: np.ndarray | None = None) -> dict[str, Tensor]:
         """Tensors for frames ``idx`` and their predecessors; ``offsets`` [B, J, 2] moves the joints of sample
         b's two pose maps (not its frames or face disc) by ``offsets[b]`` canvas pixels; ``mirror`` [B] bool
         flips sample b left-right (frames, plate, face disc; its pose maps drawn from :meth:`frame_joints`);
-        ``exemplar_pick`` [B] int: which of its candidate exemplars sample b gets (default the nearest).
+        ``exemplar_pick`` [B] int: which of its candidate exemplars sample b gets (default the nearest);
+        ``exemplar_drop`` [B] int: the limb its exemplar is blacked out along (-1, the default: none).
 
         Returns:
             ``pose_prev``, ``pose_cur``, ``frame_prev``, ``frame_cur``: [B, 3, S, S] in [-1, 1] (the previous
@@ -151,10 +154,11 @@ class ReferenceData:
             picks = np.zeros(len(idx), np.int64) if exemplar_pick is None else np.asarray(exemplar_pick)
             ks = self.exemplar_choices[idx, picks]
             ks = np.where(ks < 0, self.exemplar_choices[idx, 0], ks)  # fewer candidates than asked: the nearest
-            sample["exemplar_prev"] = to_tensor(np.stack([self.exemplar(int(p), int(k), f)
-                                                          for p, k, f in zip(prev, ks, flips)]))
-            sample["exemplar_cur"] = to_tensor(np.stack([self.exemplar(int(i), int(k), f)
-                                                         for i, k, f in zip(idx, ks, flips)]))
+            drops = np.full(len(idx), -1) if exemplar_drop is None else np.asarray(exemplar_drop)
+            sample["exemplar_prev"] = to_tensor(np.stack([self.exemplar(int(p), int(k), f, int(d))
+                                                          for p, k, f, d in zip(prev, ks, flips, drops)]))
+            sample["exemplar_cur"] = to_tensor(np.stack([self.exemplar(int(i), int(k), f, int(d))
+                                                         for i, k, f, d in zip(idx, ks, flips, drops)]))
         plates = self.plates(idx)
         if plates is not None:
             flipped = torch.tensor(flips)

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from clone.model.canvas import choose_canvas, cut_frame, image_to_canvas
-from clone.model.exemplar import GAP_SECONDS, choose_bank
+from clone.model.exemplar import GAP_SECONDS, LIMBS, choose_bank
 from clone.model.reference import DETAIL_LAYOUT, LAYOUT, ReferenceModel, preview_path
 from clone.train_ref.augment import (
     WHOLE_CANVAS_SHARE,
@@ -336,12 +336,16 @@ def _one_step(run: TrainingRun, data: ReferenceData) -> dict[str, float]:
     mirror = None
     if config.augment.mirror:  # drawn only when asked, so runs without it draw as before
         mirror = (torch.rand(total, generator=rng) < config.augment.mirror).numpy()
-    exemplar_pick = None
+    exemplar_pick = exemplar_drop = None
     if data.exemplar_choices is not None:  # drawn only with exemplars, so runs without them draw as before
         exemplar_pick = torch.randint(data.exemplar_choices.shape[1], (total,), generator=rng).numpy()[part]
+        if config.augment.exemplar_drop:
+            limb = torch.randint(len(LIMBS), (total,), generator=rng).numpy()
+            dropped = (torch.rand(total, generator=rng) < config.augment.exemplar_drop).numpy()
+            exemplar_drop = np.where(dropped, limb, -1)[part]
     idx = data.indices[pick]
-    sample = warp_batch(data.batch(idx[part], offsets, None if mirror is None else mirror[part], exemplar_pick),
-                        matrices[part])
+    sample = warp_batch(data.batch(idx[part], offsets, None if mirror is None else mirror[part], exemplar_pick,
+                                   exemplar_drop), matrices[part])
     if config.augment.person_crop:  # drawn only when asked, so runs without it draw as before
         # one window around the whole batch's people (both frames of each sample), the same on every process
         flips = np.zeros(total, bool) if mirror is None else mirror

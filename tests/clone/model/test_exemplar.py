@@ -7,13 +7,16 @@ import pytest
 import torch
 
 from clone.model.exemplar import (
+    LIMBS,
     ExemplarBank,
     choose_bank,
     drive_choices,
     fit_onto,
     pose_distances,
     pose_features,
+    stray_limbs,
     training_choices,
+    transform,
     warp_onto,
 )
 from tests.clone.train_ref.helpers import figure_track, render_figure
@@ -158,3 +161,26 @@ def test_the_fit_turns_a_little_and_no_more():
         dst = (src - centre) @ np.array([[c, s], [-s, c]]) + centre
         m = fit_onto(src, dst)
         assert np.arctan2(m[1, 0], m[0, 0]) == pytest.approx(want, abs=1e-3)
+
+
+def test_a_limb_that_strays_from_the_asked_pose_is_blacked_out_as_laid_on_and_as_asked():
+    src = (_poses(1)[0] - _poses(1)[0].mean(0)) * 0.8 + 32.0  # a 64² canvas, arms down
+    image = np.full((64, 64, 3), 200, np.uint8)
+    bank = ExemplarBank(image[None], src[None], np.array([0]))
+    dst = src.copy()
+    shoulder = dst[5]
+    dst[6], dst[7] = shoulder + [0.0, -8.0], shoulder + [0.0, -16.0]  # the left arm raised above the head
+    assert stray_limbs(transform(src, fit_onto(src, dst)), dst) == [1]
+    out = bank.exemplar(0, dst)
+    left_arm_down, left_hand_up = np.round(src[7]).astype(int), np.round(dst[7]).astype(int)
+    assert out[left_arm_down[1], left_arm_down[0]].max() == 0  # where the exemplar's own arm hangs
+    assert out[left_hand_up[1], left_hand_up[0]].max() == 0  # and where the asked arm goes
+    for joint in (4, 11, 14, 8):  # the other arm, the feet, the hips: as laid on
+        x, y = np.round(dst[joint]).astype(int)
+        assert out[y, x].min() == 200
+    # the asked pose itself: nothing strays, nothing is blacked out, but for a limb dropped on purpose
+    assert stray_limbs(src, src) == []
+    assert bank.exemplar(0, src).min() == 200
+    dropped = bank.exemplar(0, src, drop=(2,))
+    knee = np.round(src[LIMBS[2][1]]).astype(int)
+    assert dropped[knee[1], knee[0]].max() == 0 and (dropped == 0).all(-1).mean() < 0.2

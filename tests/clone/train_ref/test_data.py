@@ -148,3 +148,25 @@ def test_a_run_with_mirror_trains(reference, tmp_path):
     result = train_reference(poses, frames, tmp_path / "m.pt", config=config, steps=2, device="cpu")
     assert result.steps == 2
     assert load_reference_model(tmp_path / "m.pt").training["config"]["augment"]["mirror"] == 1.0
+
+
+def test_a_dropped_limb_blacks_out_the_samples_exemplar_along_it_and_nothing_else():
+    import torch
+
+    from clone.model.exemplar import LIMBS, choose_bank
+    from clone.train_ref import AugmentConfig
+    from clone.train_ref.data import ReferenceData
+
+    track = figure_track(40, width=64, height=64)
+    frames = np.full((40, 64, 64, 3), 180, np.uint8)
+    data = ReferenceData(frames, track.joints, np.ones(40, bool), 64, layout="body15", faces=False)
+    data.set_exemplars(choose_bank(frames, track.joints, np.ones(40, bool), max_count=8), gap=13)
+    idx = np.array([20, 21])
+    plain = data.batch(idx)
+    dropped = data.batch(idx, exemplar_drop=np.array([-1, 3]))
+    assert torch.equal(plain["exemplar_cur"][0], dropped["exemplar_cur"][0])
+    black = (dropped["exemplar_cur"][1] == -1).all(0)  # [S, S]
+    x, y = np.round(track.joints[21, LIMBS[3][1]]).astype(int)  # the left knee
+    assert bool(black[y, x]) and bool((dropped["exemplar_prev"][1] == -1).all(0).any())
+    assert not bool((plain["exemplar_cur"][1] == -1).all(0).any()) and float(black.float().mean()) < 0.2
+    assert AugmentConfig().exemplar_drop == 0.25
