@@ -15,6 +15,10 @@ pose by a similarity (least squares over the body15 joints both show; the head a
   group (one performer of a prior).
 - **Driving** (:func:`drive_choices`): the nearest bank frame of each driven pose, kept from frame to frame
   until another is clearly nearer (so the exemplar does not flick between two near ones).
+- **Limbs it gets wrong** (:func:`stray_limbs`): a limb of the exemplar as laid on that lies far from the asked
+  one (an arm down where the pose raises it) is blacked out where it lies and where it is asked, so the generator
+  paints it; training blacks out a random limb in a share of the samples (``AugmentConfig.exemplar_drop``) so that
+  it learns to.
 """
 
 from __future__ import annotations
