@@ -222,6 +222,10 @@ class ExemplarBank:
 
     def __post_init__(self) -> None:
         self.features = pose_features(self.joints)
+        torsos = np.linalg.norm(self.joints[:, _NECK] - self.joints[:, _MID_HIP], axis=-1)
+        torsos = torsos[np.isfinite(torsos)]
+        # the torso a pose without neck or hips is blacked out by (its limbs' band width)
+        self.torso = float(np.median(torsos)) if len(torsos) else float("nan")
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -239,7 +243,7 @@ class ExemplarBank:
             return out
         torso = float(np.linalg.norm(joints[_NECK] - joints[_MID_HIP]))
         if not np.isfinite(torso) or torso < 1.0:
-            torso = float(np.nanmedian(np.linalg.norm(self.joints[:, _NECK] - self.joints[:, _MID_HIP], axis=-1)))
+            torso = self.torso
         if not np.isfinite(torso) or torso < 1.0:
             return out
         chains = [pose[list(LIMBS[c])] for c in blank for pose in (laid, joints)]
