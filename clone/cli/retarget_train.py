@@ -134,6 +134,11 @@ def train(
         float, typer.Option("--bend", help="Smooth noise of this many degrees on every training motion's "
                             "upper-body joint angles, in 3D before projection; the legs keep theirs (0: none).")
     ] = 0.0,
+    source_balance: Annotated[
+        float, typer.Option("--source-balance", help="How evenly the motion-capture sources (the top folders "
+                            "under --mocap) are drawn: a window's chance goes as its source's window count to "
+                            "the power -B (0: every window alike; 1: every source alike).")
+    ] = 0.0,
     # 64 = TrainConfig's default (the paper's): runs started without the option resume with it.
     batch_size: Annotated[
         int, typer.Option("--batch-size", min=1, help="Samples per step over all processes (under torchrun each "
@@ -187,6 +192,7 @@ def train(
     check_number("--turn-share", turn_share, 0, 1)
     check_number("--splice-share", splice_share, 0, 1)
     check_number("--bend", bend, 0, 45)
+    check_number("--source-balance", source_balance, 0, 1)
     if not mocap.is_dir():
         raise InputError(f"--mocap {mocap}: no such folder")
     try:
@@ -201,7 +207,7 @@ def train(
                              extra_characters=extra_characters, extra_spread=extra_spread,
                              cameras=CameraSpread(max_pitch=max_pitch, perspective=perspective),
                              frontal_share=frontal_share, turn_share=turn_share, splice_share=splice_share,
-                             bend_deg=bend)
+                             bend_deg=bend, source_balance=source_balance)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     dev = training_device(device, threads)

@@ -59,6 +59,10 @@ class TrainConfig:
             (:func:`retarget.world.variations.splice`); validation keeps the captured motion.
         bend_deg: smooth noise of this many degrees on every training motion's upper-body joint angles
             (:func:`retarget.world.variations.bend`; 0: none).
+        source_balance: how evenly the motion-capture sources (the top folders of the world's clips, e.g. one
+            dataset each) are drawn: a window's chance goes as its source's window count to the power
+            ``-source_balance`` (0: every window alike, so a large dataset of everyday motions dominates; 1: every
+            source alike; :func:`retarget.training.data.source_weights`).
     """
 
     variant: str = "full"
@@ -85,6 +89,7 @@ class TrainConfig:
     turn_range: tuple[float, float] = (90.0, 360.0)
     splice_share: float = 0.0
     bend_deg: float = 0.0
+    source_balance: float = 0.0
 
     def __post_init__(self) -> None:
         variant_config(self.variant)  # ValueError for an unknown name
@@ -102,6 +107,8 @@ class TrainConfig:
             raise ValueError("splice_share must be a share in [0, 1]")
         if not 0 <= self.bend_deg <= 45:
             raise ValueError("bend_deg must be in [0, 45] degrees")
+        if not 0 <= self.source_balance <= 1:
+            raise ValueError("source_balance must be in [0, 1]")
 
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict (lists for tuples)."""

@@ -4,7 +4,9 @@ scales, the validation set and the data loader of one epoch."""
 from __future__ import annotations
 
 import logging
+from collections import Counter
 from collections.abc import Iterator, Sequence
+from pathlib import PurePosixPath
 from typing import Protocol
 
 import numpy as np
@@ -20,6 +22,7 @@ from retarget.network.preprocess import LAYOUT, LOCAL_INDEX, NormStats, Preproce
 from retarget.training.augment import COMBOS
 from retarget.training.config import TrainConfig
 from retarget.world.camera import FRONTAL_YAW, WORLD_CAMERAS, CameraSpread
+from retarget.world.split import WindowLabel
 from retarget.world.turns import apply_turn, draw_turn
 from retarget.world.variations import bend, draw_bend, splice
 
@@ -33,6 +36,7 @@ class WorldSplit(Protocol):
     num_characters: int
     num_views: int
     views: tuple[float, ...]  # yaw of each view bin (degrees); read only for a frontal share
+    window_labels: tuple[WindowLabel, ...]  # read only for a source balance
 
     def window(
         self, motion: int, character: int, view: int, length: int = 64, offset: int = 0,
@@ -74,13 +78,15 @@ class CrossSamples(Dataset):
             (:func:`retarget.world.variations.splice`, on the same character).
         bend_deg: when above 0, every motion's upper-body joint angles get smooth noise of this many degrees
             (:func:`retarget.world.variations.bend`); the legs keep theirs.
+        source_balance: the power of :func:`source_weights` the two motions of a sample are drawn with (0: every
+            window alike, drawing exactly what runs before the option drew).
     """
 
     def __init__(
         self, split: WorldSplit, length: int, variant: str, size: int, seed: int, scales: np.ndarray | None = None,
         cameras: CameraSpread = WORLD_CAMERAS, height: float | None = None, frontal: float = 0.0,
         turns: float = 0.0, turn_range: tuple[float, float] = (90.0, 360.0), splices: float = 0.0,
-        bend_deg: float = 0.0,
+        bend_deg: float = 0.0, source_balance: float = 0.0,
     ) -> None:
         if split.num_motions < 2:
             raise InputError(f"the motion world split has {split.num_motions} motion(s); training needs 2 or more")
@@ -113,6 +119,9 @@ class CrossSamples(Dataset):
             raise ValueError("bend_deg must be >= 0")
         self.splices = splices
         self.bend_deg = bend_deg
+        if not 0 <= source_balance <= 1:
+            raise ValueError("source_balance must be in [0, 1]")
+        self.motion_weights = source_weights(split.window_labels, source_balance) if source_balance > 0 else None
         self.frontal_views = np.arange(split.num_views)
         if frontal > 0:
             self.frontal_views = np.flatnonzero(np.abs(np.asarray(split.views)) <= FRONTAL_YAW)
@@ -127,7 +136,7 @@ class CrossSamples(Dataset):
     def sample(self, epoch: int, index: int) -> dict[str, np.ndarray]:
         """{"windows": [8, length, 15, 2] float32 (order of :data:`COMBOS`), "ids": [2, 3] int64}."""
         rng = np.random.default_rng([self.seed, epoch, index])
-        motions = rng.choice(self.split.num_motions, 2, replace=False)
+        motions = rng.choice(self.split.num_motions, 2, replace=False, p=self.motion_weights)
         chars = _pair(rng, self.split.num_characters, self.vary_character)
         # Without a frontal share no extra number is drawn: runs before it draw the same samples.
         if self.frontal > 0 and rng.random() < self.frontal:
@@ -189,6 +198,22 @@ class CrossSamples(Dataset):
             if self.bend_deg > 0:
                 bends[m] = draw_bend(rng, self.length, self.bend_deg)
         return donors, bends
+
+
+def window_source(label: WindowLabel) -> str:
+    """The motion-capture source of a window: the top folder of its clip's path under the mocap folder ("" for a
+    clip at its top level)."""
+    parts = PurePosixPath(label.path.replace("\\", "/")).parts
+    return parts[0] if len(parts) > 1 else ""
+
+
+def source_weights(labels: Sequence[WindowLabel], power: float) -> np.ndarray:
+    """[N] probabilities of drawing each of N windows: proportional to ``count ** -power``, ``count`` being the
+    windows of its source (:func:`window_source`), so the sources' shares go as ``count ** (1 - power)``."""
+    sources = [window_source(label) for label in labels]
+    counts = Counter(sources)
+    weights = np.array([counts[s] ** -float(power) for s in sources])
+    return weights / weights.sum()
 
 
 def _pair(rng: np.random.Generator, n: int, distinct: bool) -> np.ndarray:

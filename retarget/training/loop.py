@@ -138,7 +138,7 @@ def fit(
     dataset = CrossSamples(
         train_split, config.window, config.variant, config.samples_per_epoch, config.seed, begin.scales,
         config.cameras, run.preprocess.body_height, config.frontal_share, config.turn_share, config.turn_range,
-        config.splice_share, config.bend_deg,
+        config.splice_share, config.bend_deg, config.source_balance,
     )
     val = None
     if val_split is not None and world.is_main:

@@ -1,4 +1,4 @@
-"""retarget.training.data: cross samples, the frontal share, body scales, camera spreads."""
+"""retarget.training.data: cross samples, the frontal share, body scales, camera spreads, source balance."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ import pytest
 from pose_io import InputError
 from retarget.training.augment import combo_index
 from retarget.training.config import TrainConfig
-from retarget.training.data import CrossSamples, body_scales, character_heights
+from retarget.training.data import CrossSamples, body_scales, character_heights, source_weights, window_source
+from retarget.world.split import WindowLabel
 from tests.retarget.training.fake_split import TINY, CameraSplit, FakeSplit
 
 
@@ -158,3 +159,42 @@ def test_spliced_and_bent_samples_keep_their_draws_and_vary_the_motion(tiny_spli
         TrainConfig(bend_deg=90.0)
     config = TrainConfig(splice_share=0.3, bend_deg=8.0)
     assert TrainConfig.from_dict(config.to_dict()) == config
+
+
+def _labelled(split: FakeSplit, sources: list[str]) -> FakeSplit:
+    """``split`` with a window label per motion, motion i from the folder ``sources[i]``."""
+    split.window_labels = tuple(WindowLabel(f"clip{i}", f"{src}/clip{i}.bvh.gz", 0, f"g{i}", 200)
+                                for i, src in enumerate(sources))  # fmt: skip
+    return split
+
+
+def test_a_source_balance_draws_small_sources_more_often_and_none_keeps_the_draws():
+    split = _labelled(FakeSplit(motions=10), ["big"] * 8 + ["small"] * 2)
+    plain = CrossSamples(split, 64, "full", 400, seed=2)
+    unbalanced = CrossSamples(split, 64, "full", 400, seed=2, source_balance=0.0)
+    balanced = CrossSamples(split, 64, "full", 400, seed=2, source_balance=1.0)
+    for i in range(3):
+        np.testing.assert_array_equal(plain.sample(0, i)["ids"], unbalanced.sample(0, i)["ids"])
+    def small_share(samples):
+        return np.mean([samples.sample(0, i)["ids"][:, 0] >= 8 for i in range(400)])
+    # Two distinct motions per sample: every window alike gives the small source 20 % of the draws; every
+    # source alike lifts it towards a half (less, as the two motions of a sample differ).
+    assert 0.15 < small_share(plain) < 0.25
+    assert 0.38 < small_share(balanced) < 0.52
+    with pytest.raises(ValueError, match="source_balance"):
+        CrossSamples(split, 64, "full", 4, seed=0, source_balance=1.5)
+    with pytest.raises(ValueError, match="source_balance"):
+        TrainConfig(source_balance=-0.1)
+    config = TrainConfig(source_balance=0.5)
+    assert TrainConfig.from_dict(config.to_dict()) == config
+
+
+def test_source_weights_go_as_the_count_to_a_power():
+    labels = [WindowLabel("a", p, 0, "g", 100) for p in ["x/a.bvh"] * 4 + ["y/sub/b.bvh"] + ["c.bvh"]]
+    assert [window_source(label) for label in labels[3:]] == ["x", "y", ""]
+    half = source_weights(labels, 0.5)
+    np.testing.assert_allclose(half.sum(), 1.0)
+    np.testing.assert_allclose(half[:4].sum() / half[4], 2.0)  # the sources' shares as sqrt(4) : sqrt(1)
+    np.testing.assert_allclose(source_weights(labels, 0.0), np.full(6, 1 / 6))
+    even = source_weights(labels, 1.0)
+    np.testing.assert_allclose([even[:4].sum(), even[4], even[5]], [1 / 3] * 3)
